@@ -1,0 +1,65 @@
+//! `microfrep eval`: values (and gradients) at points.
+
+use crate::model;
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use microfrep_core::{GradEval, PointEval, Tape};
+use std::io::{BufRead, Write};
+
+#[derive(Args)]
+pub struct EvalArgs {
+    /// Model: a built-in example name.
+    model: String,
+    /// Coordinates x y z [x y z ...]; read from stdin (one point per line) if absent.
+    #[arg(allow_negative_numbers = true)]
+    coords: Vec<f64>,
+    /// Also print the gradient (df/dx df/dy df/dz).
+    #[arg(long)]
+    grad: bool,
+}
+
+pub fn run(a: EvalArgs) -> Result<()> {
+    let m = model::load(&a.model)?;
+    let tape = Tape::new(&m.expr);
+    let mut pe = PointEval::new(&tape);
+    let mut ge = GradEval::new(&tape);
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let mut emit = |p: [f64; 3], out: &mut dyn Write| -> Result<()> {
+        if a.grad {
+            let (v, g) = ge.eval(p);
+            writeln!(out, "{v} {} {} {}", g[0], g[1], g[2])?;
+        } else {
+            writeln!(out, "{}", pe.eval(p))?;
+        }
+        Ok(())
+    };
+    if !a.coords.is_empty() {
+        if a.coords.len() % 3 != 0 {
+            bail!("coordinates come in threes (x y z); got {}", a.coords.len());
+        }
+        for c in a.coords.chunks(3) {
+            emit([c[0], c[1], c[2]], &mut out)?;
+        }
+    } else {
+        for (i, line) in std::io::stdin().lock().lines().enumerate() {
+            let line = line.context("reading stdin")?;
+            let t = line.trim();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            let v: Vec<f64> = t
+                .split(|c: char| c.is_whitespace() || c == ',')
+                .filter(|s| !s.is_empty())
+                .map(|s| s.parse::<f64>())
+                .collect::<Result<_, _>>()
+                .with_context(|| format!("stdin line {}: not a number in '{t}'", i + 1))?;
+            if v.len() != 3 {
+                bail!("stdin line {}: expected 3 numbers (x y z), got {}", i + 1, v.len());
+            }
+            emit([v[0], v[1], v[2]], &mut out)?;
+        }
+    }
+    out.flush()?;
+    Ok(())
+}

@@ -1,0 +1,387 @@
+//! `Expr`: the user-facing way to build a model.
+//!
+//! An `Expr` is an immutable, reference-counted expression tree with operator
+//! overloading, so models read like their formulas. Shared subtrees are shared
+//! by pointer; [`crate::Graph`] later merges structurally identical ones and
+//! folds constants, so how a model was written does not change what runs.
+
+use crate::field::Field;
+use crate::ops::{BinaryOp, UnaryOp};
+use std::collections::HashMap;
+use std::fmt;
+use std::sync::Arc;
+
+/// Coordinate axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Axis {
+    X = 0,
+    Y = 1,
+    Z = 2,
+}
+
+/// One node of an expression tree.
+#[derive(Clone)]
+pub enum ExprNode {
+    Var(Axis),
+    Const(f64),
+    /// A named parameter whose value is chosen at evaluation time.
+    Param { name: Arc<str>, default: f64 },
+    Unary(UnaryOp, Expr),
+    Binary(BinaryOp, Expr, Expr),
+    /// Integer power by repeated multiplication.
+    PowI(Expr, i32),
+    /// `cond != 0 ? then : else`.
+    Select(Expr, Expr, Expr),
+    /// A data-driven field at mapped coordinates. `comp` 0 is the value,
+    /// 1..=3 the partial derivatives along x, y, z.
+    Field {
+        field: Arc<dyn Field>,
+        comp: u8,
+        args: [Expr; 3],
+    },
+}
+
+/// A scalar field over space, built from nodes. Cheap to clone.
+#[derive(Clone)]
+pub struct Expr(pub(crate) Arc<ExprNode>);
+
+impl fmt::Debug for Expr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.node() {
+            ExprNode::Var(a) => write!(f, "{}", ["x", "y", "z"][*a as usize]),
+            ExprNode::Const(c) => write!(f, "{c}"),
+            ExprNode::Param { name, .. } => write!(f, "${name}"),
+            ExprNode::Unary(op, a) => write!(f, "{}({a:?})", op.name()),
+            ExprNode::Binary(op, a, b) => write!(f, "{}({a:?}, {b:?})", op.name()),
+            ExprNode::PowI(a, n) => write!(f, "powi({a:?}, {n})"),
+            ExprNode::Select(c, a, b) => write!(f, "select({c:?}, {a:?}, {b:?})"),
+            ExprNode::Field {
+                field, comp, args, ..
+            } => write!(f, "{}[{comp}]({:?}, {:?}, {:?})", field.name(), args[0], args[1], args[2]),
+        }
+    }
+}
+
+impl Expr {
+    fn new(n: ExprNode) -> Expr {
+        Expr(Arc::new(n))
+    }
+    pub fn node(&self) -> &ExprNode {
+        &self.0
+    }
+    pub fn x() -> Expr {
+        Expr::new(ExprNode::Var(Axis::X))
+    }
+    pub fn y() -> Expr {
+        Expr::new(ExprNode::Var(Axis::Y))
+    }
+    pub fn z() -> Expr {
+        Expr::new(ExprNode::Var(Axis::Z))
+    }
+    /// The three coordinates `(x, y, z)`.
+    pub fn xyz() -> [Expr; 3] {
+        [Expr::x(), Expr::y(), Expr::z()]
+    }
+    pub fn var(a: Axis) -> Expr {
+        Expr::new(ExprNode::Var(a))
+    }
+    pub fn constant(c: f64) -> Expr {
+        Expr::new(ExprNode::Const(c))
+    }
+    /// A named parameter with a default value, settable per evaluator.
+    pub fn param(name: &str, default: f64) -> Expr {
+        Expr::new(ExprNode::Param {
+            name: name.into(),
+            default,
+        })
+    }
+    /// A data-driven field evaluated at `(x, y, z)`.
+    pub fn field(field: Arc<dyn Field>) -> Expr {
+        Expr::field_at(field, Expr::xyz())
+    }
+    /// A data-driven field evaluated at mapped coordinates.
+    pub fn field_at(field: Arc<dyn Field>, args: [Expr; 3]) -> Expr {
+        Expr::new(ExprNode::Field {
+            field,
+            comp: 0,
+            args,
+        })
+    }
+    pub(crate) fn field_comp(field: Arc<dyn Field>, comp: u8, args: [Expr; 3]) -> Expr {
+        Expr::new(ExprNode::Field { field, comp, args })
+    }
+
+    /// The constant value, if this node is one.
+    pub fn as_const(&self) -> Option<f64> {
+        match self.node() {
+            ExprNode::Const(c) => Some(*c),
+            _ => None,
+        }
+    }
+
+    pub fn unary(op: UnaryOp, a: Expr) -> Expr {
+        if let Some(c) = a.as_const() {
+            return Expr::constant(op.apply(c));
+        }
+        Expr::new(ExprNode::Unary(op, a))
+    }
+    pub fn binary(op: BinaryOp, a: Expr, b: Expr) -> Expr {
+        if let (Some(x), Some(y)) = (a.as_const(), b.as_const()) {
+            return Expr::constant(op.apply(x, y));
+        }
+        Expr::new(ExprNode::Binary(op, a, b))
+    }
+    /// `cond != 0 ? a : b`.
+    pub fn select(cond: Expr, a: Expr, b: Expr) -> Expr {
+        if let Some(c) = cond.as_const() {
+            return if c != 0.0 { a } else { b };
+        }
+        Expr::new(ExprNode::Select(cond, a, b))
+    }
+
+    pub fn neg(&self) -> Expr {
+        Expr::unary(UnaryOp::Neg, self.clone())
+    }
+    pub fn abs(&self) -> Expr {
+        Expr::unary(UnaryOp::Abs, self.clone())
+    }
+    pub fn sign(&self) -> Expr {
+        Expr::unary(UnaryOp::Sign, self.clone())
+    }
+    pub fn sqrt(&self) -> Expr {
+        Expr::unary(UnaryOp::Sqrt, self.clone())
+    }
+    pub fn square(&self) -> Expr {
+        Expr::unary(UnaryOp::Square, self.clone())
+    }
+    pub fn exp(&self) -> Expr {
+        Expr::unary(UnaryOp::Exp, self.clone())
+    }
+    pub fn ln(&self) -> Expr {
+        Expr::unary(UnaryOp::Ln, self.clone())
+    }
+    pub fn sin(&self) -> Expr {
+        Expr::unary(UnaryOp::Sin, self.clone())
+    }
+    pub fn cos(&self) -> Expr {
+        Expr::unary(UnaryOp::Cos, self.clone())
+    }
+    pub fn tan(&self) -> Expr {
+        Expr::unary(UnaryOp::Tan, self.clone())
+    }
+    pub fn asin(&self) -> Expr {
+        Expr::unary(UnaryOp::Asin, self.clone())
+    }
+    pub fn acos(&self) -> Expr {
+        Expr::unary(UnaryOp::Acos, self.clone())
+    }
+    pub fn atan(&self) -> Expr {
+        Expr::unary(UnaryOp::Atan, self.clone())
+    }
+    pub fn sinh(&self) -> Expr {
+        Expr::unary(UnaryOp::Sinh, self.clone())
+    }
+    pub fn cosh(&self) -> Expr {
+        Expr::unary(UnaryOp::Cosh, self.clone())
+    }
+    pub fn tanh(&self) -> Expr {
+        Expr::unary(UnaryOp::Tanh, self.clone())
+    }
+    pub fn floor(&self) -> Expr {
+        Expr::unary(UnaryOp::Floor, self.clone())
+    }
+    pub fn ceil(&self) -> Expr {
+        Expr::unary(UnaryOp::Ceil, self.clone())
+    }
+    pub fn trunc(&self) -> Expr {
+        Expr::unary(UnaryOp::Trunc, self.clone())
+    }
+    pub fn round(&self) -> Expr {
+        Expr::unary(UnaryOp::Round, self.clone())
+    }
+    pub fn fract(&self) -> Expr {
+        Expr::unary(UnaryOp::Fract, self.clone())
+    }
+    /// Logical not of a truth value.
+    pub fn not(&self) -> Expr {
+        Expr::unary(UnaryOp::Not, self.clone())
+    }
+    pub fn pow(&self, e: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Pow, self.clone(), e.into())
+    }
+    /// Integer power (exact repeated multiplication, defined for negative bases).
+    pub fn powi(&self, n: i32) -> Expr {
+        match n {
+            0 => Expr::constant(1.0),
+            1 => self.clone(),
+            2 => self.square(),
+            _ => match self.as_const() {
+                Some(c) => Expr::constant(c.powi(n)),
+                None => Expr::new(ExprNode::PowI(self.clone(), n)),
+            },
+        }
+    }
+    pub fn atan2(&self, x: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Atan2, self.clone(), x.into())
+    }
+    pub fn min(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Min, self.clone(), b.into())
+    }
+    pub fn max(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Max, self.clone(), b.into())
+    }
+    /// Floored modulo (result has the sign of `b`).
+    pub fn modulo(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Mod, self.clone(), b.into())
+    }
+    /// Truncated remainder, C `fmod`.
+    pub fn rem(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Rem, self.clone(), b.into())
+    }
+    pub fn lt(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Lt, self.clone(), b.into())
+    }
+    pub fn le(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Le, self.clone(), b.into())
+    }
+    pub fn gt(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Gt, self.clone(), b.into())
+    }
+    pub fn ge(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Ge, self.clone(), b.into())
+    }
+    pub fn eq_(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Eq, self.clone(), b.into())
+    }
+    pub fn ne_(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Ne, self.clone(), b.into())
+    }
+    pub fn and(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::And, self.clone(), b.into())
+    }
+    pub fn or(&self, b: impl Into<Expr>) -> Expr {
+        Expr::binary(BinaryOp::Or, self.clone(), b.into())
+    }
+
+    /// This expression with the coordinates replaced by `p`: the inverse space
+    /// mapping on which every transform and replication is built.
+    pub fn remap(&self, p: &[Expr; 3]) -> Expr {
+        let mut memo = HashMap::new();
+        self.remap_memo(p, &mut memo)
+    }
+
+    fn remap_memo(&self, p: &[Expr; 3], memo: &mut HashMap<*const ExprNode, Expr>) -> Expr {
+        let key = Arc::as_ptr(&self.0);
+        if let Some(e) = memo.get(&key) {
+            return e.clone();
+        }
+        let out = match self.node() {
+            ExprNode::Var(a) => p[*a as usize].clone(),
+            ExprNode::Const(_) | ExprNode::Param { .. } => self.clone(),
+            ExprNode::Unary(op, a) => Expr::unary(*op, a.remap_memo(p, memo)),
+            ExprNode::Binary(op, a, b) => {
+                Expr::binary(*op, a.remap_memo(p, memo), b.remap_memo(p, memo))
+            }
+            ExprNode::PowI(a, n) => a.remap_memo(p, memo).powi(*n),
+            ExprNode::Select(c, a, b) => Expr::select(
+                c.remap_memo(p, memo),
+                a.remap_memo(p, memo),
+                b.remap_memo(p, memo),
+            ),
+            ExprNode::Field { field, comp, args } => Expr::field_comp(
+                field.clone(),
+                *comp,
+                [
+                    args[0].remap_memo(p, memo),
+                    args[1].remap_memo(p, memo),
+                    args[2].remap_memo(p, memo),
+                ],
+            ),
+        };
+        memo.insert(key, out.clone());
+        out
+    }
+
+    /// Number of distinct tree nodes (by pointer), a size measure for tests and reports.
+    pub fn node_count(&self) -> usize {
+        fn walk(e: &Expr, seen: &mut std::collections::HashSet<*const ExprNode>) {
+            if !seen.insert(Arc::as_ptr(&e.0)) {
+                return;
+            }
+            for c in e.children() {
+                walk(c, seen);
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        walk(self, &mut seen);
+        seen.len()
+    }
+
+    /// Direct children in evaluation order.
+    pub fn children(&self) -> Vec<&Expr> {
+        match self.node() {
+            ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => vec![],
+            ExprNode::Unary(_, a) | ExprNode::PowI(a, _) => vec![a],
+            ExprNode::Binary(_, a, b) => vec![a, b],
+            ExprNode::Select(c, a, b) => vec![c, a, b],
+            ExprNode::Field { args, .. } => args.iter().collect(),
+        }
+    }
+}
+
+impl From<f64> for Expr {
+    fn from(c: f64) -> Expr {
+        Expr::constant(c)
+    }
+}
+impl From<&Expr> for Expr {
+    fn from(e: &Expr) -> Expr {
+        e.clone()
+    }
+}
+
+macro_rules! binop {
+    ($tr:ident, $m:ident, $op:expr) => {
+        impl<T: Into<Expr>> std::ops::$tr<T> for Expr {
+            type Output = Expr;
+            fn $m(self, rhs: T) -> Expr {
+                Expr::binary($op, self, rhs.into())
+            }
+        }
+        impl<T: Into<Expr>> std::ops::$tr<T> for &Expr {
+            type Output = Expr;
+            fn $m(self, rhs: T) -> Expr {
+                Expr::binary($op, self.clone(), rhs.into())
+            }
+        }
+        impl std::ops::$tr<Expr> for f64 {
+            type Output = Expr;
+            fn $m(self, rhs: Expr) -> Expr {
+                Expr::binary($op, Expr::constant(self), rhs)
+            }
+        }
+        impl std::ops::$tr<&Expr> for f64 {
+            type Output = Expr;
+            fn $m(self, rhs: &Expr) -> Expr {
+                Expr::binary($op, Expr::constant(self), rhs.clone())
+            }
+        }
+    };
+}
+binop!(Add, add, BinaryOp::Add);
+binop!(Sub, sub, BinaryOp::Sub);
+binop!(Mul, mul, BinaryOp::Mul);
+binop!(Div, div, BinaryOp::Div);
+
+impl std::ops::Neg for Expr {
+    type Output = Expr;
+    fn neg(self) -> Expr {
+        Expr::unary(UnaryOp::Neg, self)
+    }
+}
+impl std::ops::Neg for &Expr {
+    type Output = Expr;
+    fn neg(self) -> Expr {
+        Expr::unary(UnaryOp::Neg, self.clone())
+    }
+}

@@ -1,0 +1,254 @@
+//! Data-driven fields: sampled data that behaves like any other graph node.
+//!
+//! A [`Field`] gives the four evaluation modes for a function of three
+//! coordinates. The graph calls it at mapped coordinates, so a field composes
+//! with transforms, set operations and as a parameter of other operations.
+
+use crate::interval::Interval;
+use std::fmt::Debug;
+
+/// A scalar function of space backed by data (grids, meshes, images, ...).
+pub trait Field: Send + Sync + Debug {
+    /// Short name for diagnostics.
+    fn name(&self) -> &str;
+    /// Reference value.
+    fn eval(&self, p: [f64; 3]) -> f64;
+    /// Value and gradient.
+    fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]);
+    /// Bounds of the value over a box; must contain every `eval` in the box.
+    fn interval(&self, b: [Interval; 3]) -> Interval;
+    /// Bounds of the partial derivatives over a box. The default knows nothing.
+    fn grad_interval(&self, _b: [Interval; 3]) -> [Interval; 3] {
+        [Interval::ENTIRE; 3]
+    }
+    /// Values for a batch (f32, the hot path). Override for speed.
+    fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        for i in 0..out.len() {
+            out[i] = self.eval([x[i] as f64, y[i] as f64, z[i] as f64]) as f32;
+        }
+    }
+}
+
+/// Regular grid of samples over a box with trilinear interpolation; outside
+/// the box the coordinates are clamped to it (the nearest boundary sample).
+#[derive(Clone, Debug)]
+pub struct GridField {
+    name: String,
+    dims: [usize; 3],
+    min: [f64; 3],
+    max: [f64; 3],
+    /// x fastest, then y, then z.
+    values: Vec<f64>,
+    /// (min, max) of the 8 samples of each cell, for interval bounds.
+    cell_range: Vec<(f64, f64)>,
+    range: (f64, f64),
+}
+
+/// Errors when building a grid field.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum GridError {
+    #[error("grid needs at least 2 samples on each axis, got {0:?}")]
+    TooSmall([usize; 3]),
+    #[error("grid has {got} values, dims {dims:?} need {want}")]
+    WrongLength {
+        dims: [usize; 3],
+        got: usize,
+        want: usize,
+    },
+    #[error("grid box is empty or not finite on axis {0}")]
+    BadBox(usize),
+    #[error("grid value {index} is not finite")]
+    NotFinite { index: usize },
+}
+
+impl GridField {
+    pub fn new(
+        name: &str,
+        dims: [usize; 3],
+        min: [f64; 3],
+        max: [f64; 3],
+        values: Vec<f64>,
+    ) -> Result<GridField, GridError> {
+        if dims.iter().any(|&d| d < 2) {
+            return Err(GridError::TooSmall(dims));
+        }
+        let want = dims[0] * dims[1] * dims[2];
+        if values.len() != want {
+            return Err(GridError::WrongLength {
+                dims,
+                got: values.len(),
+                want,
+            });
+        }
+        for a in 0..3 {
+            if !(min[a] < max[a]) || !min[a].is_finite() || !max[a].is_finite() {
+                return Err(GridError::BadBox(a));
+            }
+        }
+        if let Some(index) = values.iter().position(|v| !v.is_finite()) {
+            return Err(GridError::NotFinite { index });
+        }
+        let [nx, ny, nz] = dims;
+        let mut cell_range = Vec::with_capacity((nx - 1) * (ny - 1) * (nz - 1));
+        for k in 0..nz - 1 {
+            for j in 0..ny - 1 {
+                for i in 0..nx - 1 {
+                    let mut lo = f64::INFINITY;
+                    let mut hi = f64::NEG_INFINITY;
+                    for c in 0..8 {
+                        let v =
+                            values[(i + (c & 1)) + nx * ((j + (c >> 1 & 1)) + ny * (k + (c >> 2)))];
+                        lo = lo.min(v);
+                        hi = hi.max(v);
+                    }
+                    cell_range.push((lo, hi));
+                }
+            }
+        }
+        let range = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        Ok(GridField {
+            name: name.to_string(),
+            dims,
+            min,
+            max,
+            values,
+            cell_range,
+            range,
+        })
+    }
+
+    /// Samples a function on the grid nodes.
+    pub fn sample(
+        name: &str,
+        dims: [usize; 3],
+        min: [f64; 3],
+        max: [f64; 3],
+        f: impl Fn([f64; 3]) -> f64,
+    ) -> Result<GridField, GridError> {
+        let mut v = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let idx = [i, j, k];
+                    let p: [f64; 3] = std::array::from_fn(|a| {
+                        min[a] + (max[a] - min[a]) * idx[a] as f64 / (dims[a] - 1) as f64
+                    });
+                    v.push(f(p));
+                }
+            }
+        }
+        GridField::new(name, dims, min, max, v)
+    }
+
+    fn spacing(&self, a: usize) -> f64 {
+        (self.max[a] - self.min[a]) / (self.dims[a] - 1) as f64
+    }
+
+    /// Cell index and local coordinate in [0, 1] on one axis, clamped; the
+    /// flag says whether the coordinate was inside the box (derivative nonzero).
+    fn locate(&self, a: usize, v: f64) -> (usize, f64, bool) {
+        let n = self.dims[a];
+        let t = (v - self.min[a]) / self.spacing(a);
+        if !(t > 0.0) {
+            return (0, 0.0, false);
+        }
+        if t >= (n - 1) as f64 {
+            return (n - 2, 1.0, false);
+        }
+        let i = (t.floor() as usize).min(n - 2);
+        (i, t - i as f64, true)
+    }
+
+    fn at(&self, i: usize, j: usize, k: usize) -> f64 {
+        self.values[i + self.dims[0] * (j + self.dims[1] * k)]
+    }
+
+    /// Index range of cells whose closed extent meets [lo, hi] on one axis.
+    fn cell_span(&self, a: usize, iv: Interval) -> (usize, usize) {
+        let h = self.spacing(a);
+        let n = self.dims[a] - 1;
+        let f = |v: f64| ((v - self.min[a]) / h).floor().clamp(0.0, (n - 1) as f64) as usize;
+        (f(iv.lo), f(iv.hi))
+    }
+}
+
+impl Field for GridField {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn eval(&self, p: [f64; 3]) -> f64 {
+        self.grad(p).0
+    }
+
+    fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        if p.iter().any(|v| v.is_nan()) {
+            return (f64::NAN, [f64::NAN; 3]);
+        }
+        let (i, u, du) = self.locate(0, p[0]);
+        let (j, v, dv) = self.locate(1, p[1]);
+        let (k, w, dw) = self.locate(2, p[2]);
+        let c = |a: usize, b: usize, c: usize| self.at(i + a, j + b, k + c);
+        let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        let c00 = lerp(c(0, 0, 0), c(1, 0, 0), u);
+        let c10 = lerp(c(0, 1, 0), c(1, 1, 0), u);
+        let c01 = lerp(c(0, 0, 1), c(1, 0, 1), u);
+        let c11 = lerp(c(0, 1, 1), c(1, 1, 1), u);
+        let c0 = lerp(c00, c10, v);
+        let c1 = lerp(c01, c11, v);
+        let val = lerp(c0, c1, w);
+        let gx = {
+            let d00 = c(1, 0, 0) - c(0, 0, 0);
+            let d10 = c(1, 1, 0) - c(0, 1, 0);
+            let d01 = c(1, 0, 1) - c(0, 0, 1);
+            let d11 = c(1, 1, 1) - c(0, 1, 1);
+            lerp(lerp(d00, d10, v), lerp(d01, d11, v), w) / self.spacing(0)
+        };
+        let gy = lerp(c10 - c00, c11 - c01, w) / self.spacing(1);
+        let gz = (c1 - c0) / self.spacing(2);
+        let g = [
+            if du { gx } else { 0.0 },
+            if dv { gy } else { 0.0 },
+            if dw { gz } else { 0.0 },
+        ];
+        (val, g)
+    }
+
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        if b.iter().any(|i| i.is_nan()) {
+            return Interval::nan();
+        }
+        // Trilinear interpolation stays within the range of each cell's corners.
+        let (i0, i1) = self.cell_span(0, b[0]);
+        let (j0, j1) = self.cell_span(1, b[1]);
+        let (k0, k1) = self.cell_span(2, b[2]);
+        let cells = (i1 - i0 + 1) * (j1 - j0 + 1) * (k1 - k0 + 1);
+        if cells > 4096 {
+            return Interval::new(self.range.0, self.range.1);
+        }
+        let (nx, ny) = (self.dims[0] - 1, self.dims[1] - 1);
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for k in k0..=k1 {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let (l, h) = self.cell_range[i + nx * (j + ny * k)];
+                    lo = lo.min(l);
+                    hi = hi.max(h);
+                }
+            }
+        }
+        // Interpolation rounding can leave the corner range by an ulp.
+        Interval::new(lo.next_down(), hi.next_up())
+    }
+
+    fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        for i in 0..out.len() {
+            out[i] = self.grad([x[i] as f64, y[i] as f64, z[i] as f64]).0 as f32;
+        }
+    }
+}

@@ -1,0 +1,186 @@
+//! FRep operations on defining functions (inside is `f >= 0`).
+//!
+//! R-functions, blends, offsets, metamorphosis, smooth n-ary operations and
+//! replicating waves (Pasko et al. 2009, Eqs. 2-3, 7; Fryazinov et al.
+//! Eqs. 2-3, 10-14; Park et al. section 2.2). Every numeric parameter is an
+//! [`Expr`], so it may vary in space.
+
+use crate::expr::Expr;
+
+/// `sqrt(f1^2 + f2^2 - 2 alpha f1 f2)`, with the alpha term dropped at the
+/// common alpha = 0 so the graph stays minimal.
+fn r_root(f1: &Expr, f2: &Expr, alpha: &Expr) -> Expr {
+    let s = f1.square() + f2.square();
+    match alpha.as_const() {
+        Some(a) if a == 0.0 => s.sqrt(),
+        _ => (s - 2.0 * alpha * f1 * f2).sqrt(),
+    }
+}
+
+fn scale_alpha(e: Expr, alpha: &Expr) -> Expr {
+    match alpha.as_const() {
+        Some(a) if a == 0.0 => e,
+        _ => e / (1.0 + alpha),
+    }
+}
+
+/// R-function union `(f1 + f2 + sqrt(f1^2 + f2^2 - 2 a f1 f2)) / (1 + a)`;
+/// `alpha = 1` is exactly `max`, `alpha = 0` is HyperFun's `|`.
+pub fn union(f1: &Expr, f2: &Expr, alpha: impl Into<Expr>) -> Expr {
+    let alpha = alpha.into();
+    if alpha.as_const() == Some(1.0) {
+        return f1.max(f2);
+    }
+    scale_alpha(f1 + f2 + r_root(f1, f2, &alpha), &alpha)
+}
+
+/// R-function intersection; `alpha = 1` is exactly `min`.
+pub fn intersection(f1: &Expr, f2: &Expr, alpha: impl Into<Expr>) -> Expr {
+    let alpha = alpha.into();
+    if alpha.as_const() == Some(1.0) {
+        return f1.min(f2);
+    }
+    scale_alpha(f1 + f2 - r_root(f1, f2, &alpha), &alpha)
+}
+
+/// `f1 \ f2 = f1 & (-f2)`.
+pub fn subtraction(f1: &Expr, f2: &Expr, alpha: impl Into<Expr>) -> Expr {
+    intersection(f1, &f2.neg(), alpha)
+}
+
+/// Set complement `-f`.
+pub fn complement(f: &Expr) -> Expr {
+    f.neg()
+}
+
+/// Union of many shapes, folded left to right.
+pub fn union_all(fs: &[Expr], alpha: impl Into<Expr>) -> Expr {
+    let alpha = alpha.into();
+    let mut it = fs.iter();
+    let first = it.next().expect("union of no shapes").clone();
+    it.fold(first, |acc, f| union(&acc, f, alpha.clone()))
+}
+
+/// Intersection of many shapes, folded left to right.
+pub fn intersection_all(fs: &[Expr], alpha: impl Into<Expr>) -> Expr {
+    let alpha = alpha.into();
+    let mut it = fs.iter();
+    let first = it.next().expect("intersection of no shapes").clone();
+    it.fold(first, |acc, f| intersection(&acc, f, alpha.clone()))
+}
+
+/// Blend parameters of Eq. 7: `a0` amount (> 0 adds material), `a1`, `a2`
+/// extent along each argument.
+#[derive(Clone, Debug)]
+pub struct Blend {
+    pub a0: Expr,
+    pub a1: Expr,
+    pub a2: Expr,
+}
+
+impl Blend {
+    pub fn new(a0: impl Into<Expr>, a1: impl Into<Expr>, a2: impl Into<Expr>) -> Blend {
+        Blend {
+            a0: a0.into(),
+            a1: a1.into(),
+            a2: a2.into(),
+        }
+    }
+    /// The displacement `a0 / (1 + (f1/a1)^2 + (f2/a2)^2)`.
+    pub fn displacement(&self, f1: &Expr, f2: &Expr) -> Expr {
+        &self.a0 / (1.0 + (f1 / &self.a1).square() + (f2 / &self.a2).square())
+    }
+}
+
+/// Blended union (Eq. 7 with `|a`).
+pub fn blend_union(f1: &Expr, f2: &Expr, b: &Blend, alpha: impl Into<Expr>) -> Expr {
+    union(f1, f2, alpha) + b.displacement(f1, f2)
+}
+
+/// Blended intersection (Eq. 7).
+pub fn blend_intersection(f1: &Expr, f2: &Expr, b: &Blend, alpha: impl Into<Expr>) -> Expr {
+    intersection(f1, f2, alpha) + b.displacement(f1, f2)
+}
+
+/// Blended subtraction: blended intersection with `-f2`.
+pub fn blend_subtraction(f1: &Expr, f2: &Expr, b: &Blend, alpha: impl Into<Expr>) -> Expr {
+    let n = f2.neg();
+    intersection(f1, &n, alpha) + b.displacement(f1, &n)
+}
+
+/// Constant offset `f + d` (Eq. 13): `d > 0` grows the solid.
+pub fn offset(f: &Expr, d: impl Into<Expr>) -> Expr {
+    f + d.into()
+}
+
+/// Normalised offset `f / sqrt(f^2 + |grad f|^2) + d` (Eq. 14): the
+/// normalisation makes `f` behave like a distance near its zero set, so the
+/// offset is nearly uniform in thickness. The gradient is built symbolically,
+/// so the result supports every evaluation mode.
+pub fn normalized_offset(f: &Expr, d: impl Into<Expr>) -> Expr {
+    normalize(f) + d.into()
+}
+
+/// `f / sqrt(f^2 + |grad f|^2)`: a distance-like version of `f` with the same zero set.
+pub fn normalize(f: &Expr) -> Expr {
+    let g = f.gradient();
+    f / (f.square() + g[0].square() + g[1].square() + g[2].square()).sqrt()
+}
+
+/// Metamorphosis: linear interpolation `f1 (1 - t) + f2 t`; `t` may be a field.
+pub fn morph(f1: &Expr, f2: &Expr, t: impl Into<Expr>) -> Expr {
+    let t = t.into();
+    f1 * (1.0 - &t) + f2 * t
+}
+
+/// Smooth union of n positive functions (Park et al. Eq. in 2.2, translated
+/// to inside-positive densities): `(sum f_i^a)^(1/a)`, tending to `max` as
+/// `a -> inf`. Defined for `f_i > 0` (densities, potentials).
+pub fn smooth_union_n(fs: &[Expr], a: impl Into<Expr>) -> Expr {
+    let a = a.into();
+    let sum = fs
+        .iter()
+        .map(|f| f.pow(a.clone()))
+        .reduce(|s, t| s + t)
+        .expect("smooth union of no shapes");
+    sum.pow(1.0 / a)
+}
+
+/// Smooth intersection of n positive functions: `(sum f_i^-a)^(-1/a)`,
+/// tending to `min` as `a -> inf`.
+pub fn smooth_intersection_n(fs: &[Expr], a: impl Into<Expr>) -> Expr {
+    let a = a.into();
+    let sum = fs
+        .iter()
+        .map(|f| f.pow(a.neg()))
+        .reduce(|s, t| s + t)
+        .expect("smooth intersection of no shapes");
+    sum.pow(-1.0 / a)
+}
+
+/// Sawtooth replicating function (Fryazinov Eq. 2) with period `a`, which
+/// may be a field (Eq. 10): `1/2 + (t/a - floor(t/a + 1/2))`, values in [0, 1).
+pub fn sawtooth(t: &Expr, period: impl Into<Expr>) -> Expr {
+    Expr::unary(crate::UnaryOp::Saw, t / period.into())
+}
+
+/// Triangle-wave replicating function (Fryazinov Eq. 3, Eq. 11 with a field
+/// period): equal to `1/2 + asin(sin(pi t/a))/pi`, computed exactly with
+/// `fract`. Values in [0, 1]; its period is `2a` and every second cell of
+/// width `a` is mirrored.
+pub fn triangle(t: &Expr, period: impl Into<Expr>) -> Expr {
+    Expr::unary(crate::UnaryOp::Tri, t / period.into())
+}
+
+/// Bias `t^(ln b / ln 0.5)` (Park et al.): bias(0) = 0, bias(0.5) = b, bias(1) = 1.
+pub fn bias(t: &Expr, b: impl Into<Expr>) -> Expr {
+    t.pow(b.into().ln() / 0.5f64.ln())
+}
+
+/// Gain (Park et al.): `bias_{1-g}(2t)/2` below 1/2, `1 - bias_{1-g}(2 - 2t)/2` above.
+pub fn gain(t: &Expr, g: impl Into<Expr>) -> Expr {
+    let b = 1.0 - g.into();
+    let lo = bias(&(2.0 * t), b.clone()) * 0.5;
+    let hi = 1.0 - bias(&(2.0 - 2.0 * t), b) * 0.5;
+    Expr::select(t.lt(0.5), lo, hi)
+}

@@ -1,0 +1,228 @@
+//! The deduplicated expression graph that gets compiled.
+//!
+//! Every node is interned: structurally identical nodes get the same id
+//! (commutative ops have their arguments ordered first), constants are folded
+//! and trivial identities removed. Node ids are in topological order by
+//! construction, which the tape compiler relies on.
+
+use crate::expr::{Axis, Expr, ExprNode};
+use crate::field::Field;
+use crate::ops::{BinaryOp, UnaryOp};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeId(pub u32);
+
+/// A graph node; children refer to earlier nodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Node {
+    Var(Axis),
+    /// Constant, stored as bits so that nodes can be hashed (NaN payloads and
+    /// signed zeros stay distinct, which is what bit-exact folding needs).
+    Const(u64),
+    Param(u32),
+    Unary(UnaryOp, NodeId),
+    Binary(BinaryOp, NodeId, NodeId),
+    PowI(NodeId, i32),
+    Select(NodeId, NodeId, NodeId),
+    Field {
+        field: u32,
+        comp: u8,
+        args: [NodeId; 3],
+    },
+}
+
+/// A named parameter: its name and default value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamInfo {
+    pub name: String,
+    pub default: f64,
+}
+
+#[derive(Default, Clone)]
+pub struct Graph {
+    nodes: Vec<Node>,
+    index: HashMap<Node, NodeId>,
+    fields: Vec<Arc<dyn Field>>,
+    params: Vec<ParamInfo>,
+}
+
+impl Graph {
+    pub fn new() -> Graph {
+        Graph::default()
+    }
+
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+    pub fn node(&self, id: NodeId) -> Node {
+        self.nodes[id.0 as usize]
+    }
+    pub fn fields(&self) -> &[Arc<dyn Field>] {
+        &self.fields
+    }
+    pub fn params(&self) -> &[ParamInfo] {
+        &self.params
+    }
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Adds an expression tree, returning its root.
+    pub fn add(&mut self, e: &Expr) -> NodeId {
+        let mut memo = HashMap::new();
+        self.add_memo(e, &mut memo)
+    }
+
+    fn add_memo(&mut self, e: &Expr, memo: &mut HashMap<*const ExprNode, NodeId>) -> NodeId {
+        let key = Arc::as_ptr(&e.0);
+        if let Some(&id) = memo.get(&key) {
+            return id;
+        }
+        // Iterative post-order walk: HyperFun models and remapped lattices can
+        // nest thousands deep, more than the thread stack would survive.
+        let mut stack: Vec<(&Expr, bool)> = vec![(e, false)];
+        while let Some((cur, expanded)) = stack.pop() {
+            let k = Arc::as_ptr(&cur.0);
+            if memo.contains_key(&k) {
+                continue;
+            }
+            if !expanded {
+                stack.push((cur, true));
+                for c in cur.children().into_iter().rev() {
+                    if !memo.contains_key(&Arc::as_ptr(&c.0)) {
+                        stack.push((c, false));
+                    }
+                }
+                continue;
+            }
+            let get = |c: &Expr| memo[&Arc::as_ptr(&c.0)];
+            let id = match cur.node() {
+                ExprNode::Var(a) => self.intern(Node::Var(*a)),
+                ExprNode::Const(c) => self.constant(*c),
+                ExprNode::Param { name, default } => {
+                    let idx = match self.params.iter().position(|p| p.name == **name) {
+                        Some(i) => i,
+                        None => {
+                            self.params.push(ParamInfo {
+                                name: name.to_string(),
+                                default: *default,
+                            });
+                            self.params.len() - 1
+                        }
+                    };
+                    self.intern(Node::Param(idx as u32))
+                }
+                ExprNode::Unary(op, a) => {
+                    let a = get(a);
+                    self.unary(*op, a)
+                }
+                ExprNode::Binary(op, a, b) => {
+                    let (a, b) = (get(a), get(b));
+                    self.binary(*op, a, b)
+                }
+                ExprNode::PowI(a, n) => {
+                    let a = get(a);
+                    self.powi(a, *n)
+                }
+                ExprNode::Select(c, a, b) => {
+                    let (c, a, b) = (get(c), get(a), get(b));
+                    self.select(c, a, b)
+                }
+                ExprNode::Field { field, comp, args } => {
+                    let args = [get(&args[0]), get(&args[1]), get(&args[2])];
+                    let fi = match self.fields.iter().position(|f| Arc::ptr_eq(f, field)) {
+                        Some(i) => i,
+                        None => {
+                            self.fields.push(field.clone());
+                            self.fields.len() - 1
+                        }
+                    };
+                    self.intern(Node::Field {
+                        field: fi as u32,
+                        comp: *comp,
+                        args,
+                    })
+                }
+            };
+            memo.insert(k, id);
+        }
+        memo[&key]
+    }
+
+    fn intern(&mut self, n: Node) -> NodeId {
+        if let Some(&id) = self.index.get(&n) {
+            return id;
+        }
+        let id = NodeId(self.nodes.len() as u32);
+        self.nodes.push(n);
+        self.index.insert(n, id);
+        id
+    }
+
+    pub fn constant(&mut self, c: f64) -> NodeId {
+        self.intern(Node::Const(c.to_bits()))
+    }
+
+    /// The constant value of a node, if it is one.
+    pub fn const_value(&self, id: NodeId) -> Option<f64> {
+        match self.node(id) {
+            Node::Const(b) => Some(f64::from_bits(b)),
+            _ => None,
+        }
+    }
+
+    pub fn unary(&mut self, op: UnaryOp, a: NodeId) -> NodeId {
+        if let Some(c) = self.const_value(a) {
+            return self.constant(op.apply(c));
+        }
+        if let (UnaryOp::Neg, Node::Unary(UnaryOp::Neg, inner)) = (op, self.node(a)) {
+            return inner;
+        }
+        self.intern(Node::Unary(op, a))
+    }
+
+    pub fn binary(&mut self, op: BinaryOp, a: NodeId, b: NodeId) -> NodeId {
+        let (ca, cb) = (self.const_value(a), self.const_value(b));
+        if let (Some(x), Some(y)) = (ca, cb) {
+            return self.constant(op.apply(x, y));
+        }
+        // Identities that hold for every input, NaN and infinities included.
+        match (op, ca, cb) {
+            (BinaryOp::Add, Some(z), _) if z == 0.0 && z.is_sign_negative() => return b,
+            (BinaryOp::Add, _, Some(z)) if z == 0.0 && z.is_sign_negative() => return a,
+            (BinaryOp::Sub, _, Some(z)) if z == 0.0 && z.is_sign_positive() => return a,
+            (BinaryOp::Mul, Some(o), _) if o == 1.0 => return b,
+            (BinaryOp::Mul, _, Some(o)) | (BinaryOp::Div, _, Some(o)) if o == 1.0 => return a,
+            (BinaryOp::Min | BinaryOp::Max, _, _) if a == b => return a,
+            _ => {}
+        }
+        let (a, b) = if op.commutative() && b < a { (b, a) } else { (a, b) };
+        self.intern(Node::Binary(op, a, b))
+    }
+
+    pub fn powi(&mut self, a: NodeId, n: i32) -> NodeId {
+        if let Some(c) = self.const_value(a) {
+            return self.constant(c.powi(n));
+        }
+        match n {
+            1 => a,
+            2 => self.unary(UnaryOp::Square, a),
+            _ => self.intern(Node::PowI(a, n)),
+        }
+    }
+
+    pub fn select(&mut self, c: NodeId, a: NodeId, b: NodeId) -> NodeId {
+        if let Some(v) = self.const_value(c) {
+            return if v != 0.0 { a } else { b };
+        }
+        if a == b {
+            return a;
+        }
+        self.intern(Node::Select(c, a, b))
+    }
+}

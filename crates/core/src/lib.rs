@@ -1,0 +1,38 @@
+//! microfrep core: FRep models as expression graphs, compiled once into a
+//! tape and evaluated in four modes.
+//!
+//! ```
+//! use microfrep_core::{Expr, Tape, PointEval, prims, frep};
+//! let p = Expr::xyz();
+//! let ball = prims::sphere(&p, &prims::v3([0.0; 3]), 1.0);
+//! let cut = prims::half_space(&p, [0.0; 3], [0.0, 0.0, 1.0]);
+//! let half_ball = frep::intersection(&ball, &cut, 1.0);
+//! let tape = Tape::new(&half_ball);
+//! assert_eq!(PointEval::new(&tape).eval([0.0, 0.0, -0.5]), 0.5);
+//! ```
+//!
+//! Sign convention everywhere: inside is `f >= 0`.
+
+pub mod eval;
+pub mod expr;
+pub mod field;
+pub mod frep;
+pub mod graph;
+pub mod interval;
+pub mod ops;
+pub mod prims;
+pub mod simd_math;
+mod symbolic;
+pub mod tape;
+pub mod transform;
+
+pub use eval::{
+    eval_grid_par, eval_points_par, BatchEval, GradBatchEval, GradEval, IntervalEval, PointEval,
+    BLOCK,
+};
+pub use expr::{Axis, Expr, ExprNode};
+pub use field::{Field, GridField};
+pub use graph::{Graph, Node, NodeId};
+pub use interval::Interval;
+pub use ops::{BinaryOp, UnaryOp};
+pub use tape::Tape;

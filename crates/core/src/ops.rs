@@ -1,0 +1,301 @@
+//! The operation set of the expression graph and its scalar (f64) semantics.
+//!
+//! The f64 functions here are the reference meaning of every op: the point
+//! evaluator and constant folding both call them, so a folded constant is
+//! bit-identical to what evaluation would have produced.
+
+/// Operations with one argument.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum UnaryOp {
+    Neg,
+    Abs,
+    /// -1, 0 or 1 (0 for NaN).
+    Sign,
+    Sqrt,
+    Square,
+    Exp,
+    /// Natural logarithm.
+    Ln,
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sinh,
+    Cosh,
+    Tanh,
+    Floor,
+    Ceil,
+    /// Towards zero.
+    Trunc,
+    /// Half away from zero.
+    Round,
+    /// `v - floor(v)`, in `[0, 1)`.
+    Fract,
+    /// Triangle wave `1/2 + asin(sin(pi u))/pi`, period 2, values in [0, 1],
+    /// computed exactly from `fract` (Fryazinov et al. Eq. 3 with `u = t/a`).
+    Tri,
+    /// Sawtooth `1/2 + u - floor(u + 1/2)`, period 1, values in [0, 1)
+    /// (Fryazinov et al. Eq. 2 with `u = t/a`).
+    Saw,
+    /// Logical not on truth values: 1 if the argument is 0, else 0.
+    Not,
+}
+
+/// Operations with two arguments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BinaryOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    /// Real power `a^b` as `powf` (NaN for negative base and fractional exponent).
+    Pow,
+    /// `atan2(a, b)`, `a` the y-like argument.
+    Atan2,
+    Min,
+    Max,
+    /// Floored modulo: `a - b*floor(a/b)`, sign of `b`.
+    Mod,
+    /// Truncated remainder (C `fmod`), sign of `a`.
+    Rem,
+    Lt,
+    Le,
+    Gt,
+    Ge,
+    Eq,
+    Ne,
+    /// Logical and of truth values (nonzero is true); result 1 or 0.
+    And,
+    Or,
+}
+
+impl UnaryOp {
+    pub const ALL: [UnaryOp; 24] = [
+        UnaryOp::Neg,
+        UnaryOp::Abs,
+        UnaryOp::Sign,
+        UnaryOp::Sqrt,
+        UnaryOp::Square,
+        UnaryOp::Exp,
+        UnaryOp::Ln,
+        UnaryOp::Sin,
+        UnaryOp::Cos,
+        UnaryOp::Tan,
+        UnaryOp::Asin,
+        UnaryOp::Acos,
+        UnaryOp::Atan,
+        UnaryOp::Sinh,
+        UnaryOp::Cosh,
+        UnaryOp::Tanh,
+        UnaryOp::Floor,
+        UnaryOp::Ceil,
+        UnaryOp::Trunc,
+        UnaryOp::Round,
+        UnaryOp::Fract,
+        UnaryOp::Tri,
+        UnaryOp::Saw,
+        UnaryOp::Not,
+    ];
+
+    /// Reference value.
+    #[inline]
+    pub fn apply(self, a: f64) -> f64 {
+        use UnaryOp::*;
+        match self {
+            Neg => -a,
+            Abs => a.abs(),
+            Sign => sign(a),
+            Sqrt => a.sqrt(),
+            Square => a * a,
+            Exp => a.exp(),
+            Ln => a.ln(),
+            Sin => a.sin(),
+            Cos => a.cos(),
+            Tan => a.tan(),
+            Asin => a.asin(),
+            Acos => a.acos(),
+            Atan => a.atan(),
+            Sinh => a.sinh(),
+            Cosh => a.cosh(),
+            Tanh => a.tanh(),
+            Floor => a.floor(),
+            Ceil => a.ceil(),
+            Trunc => a.trunc(),
+            Round => a.round(),
+            Fract => a - a.floor(),
+            Tri => tri_wave(a),
+            Saw => saw_wave(a),
+            Not => truth(a == 0.0),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        use UnaryOp::*;
+        match self {
+            Neg => "neg",
+            Abs => "abs",
+            Sign => "sign",
+            Sqrt => "sqrt",
+            Square => "square",
+            Exp => "exp",
+            Ln => "ln",
+            Sin => "sin",
+            Cos => "cos",
+            Tan => "tan",
+            Asin => "asin",
+            Acos => "acos",
+            Atan => "atan",
+            Sinh => "sinh",
+            Cosh => "cosh",
+            Tanh => "tanh",
+            Floor => "floor",
+            Ceil => "ceil",
+            Trunc => "trunc",
+            Round => "round",
+            Fract => "fract",
+            Tri => "tri",
+            Saw => "saw",
+            Not => "not",
+        }
+    }
+}
+
+impl BinaryOp {
+    pub const ALL: [BinaryOp; 18] = [
+        BinaryOp::Add,
+        BinaryOp::Sub,
+        BinaryOp::Mul,
+        BinaryOp::Div,
+        BinaryOp::Pow,
+        BinaryOp::Atan2,
+        BinaryOp::Min,
+        BinaryOp::Max,
+        BinaryOp::Mod,
+        BinaryOp::Rem,
+        BinaryOp::Lt,
+        BinaryOp::Le,
+        BinaryOp::Gt,
+        BinaryOp::Ge,
+        BinaryOp::Eq,
+        BinaryOp::Ne,
+        BinaryOp::And,
+        BinaryOp::Or,
+    ];
+
+    /// Reference value.
+    #[inline]
+    pub fn apply(self, a: f64, b: f64) -> f64 {
+        use BinaryOp::*;
+        match self {
+            Add => a + b,
+            Sub => a - b,
+            Mul => a * b,
+            Div => a / b,
+            Pow => a.powf(b),
+            Atan2 => a.atan2(b),
+            Min => fmin(a, b),
+            Max => fmax(a, b),
+            Mod => a - b * (a / b).floor(),
+            Rem => a % b,
+            Lt => truth(a < b),
+            Le => truth(a <= b),
+            Gt => truth(a > b),
+            Ge => truth(a >= b),
+            Eq => truth(a == b),
+            Ne => truth(a != b),
+            And => truth(a != 0.0 && b != 0.0),
+            Or => truth(a != 0.0 || b != 0.0),
+        }
+    }
+
+    /// True for ops with `op(a, b) == op(b, a)`, used to canonicalise the graph.
+    pub fn commutative(self) -> bool {
+        use BinaryOp::*;
+        matches!(self, Add | Mul | Min | Max | Eq | Ne | And | Or)
+    }
+
+    pub fn name(self) -> &'static str {
+        use BinaryOp::*;
+        match self {
+            Add => "add",
+            Sub => "sub",
+            Mul => "mul",
+            Div => "div",
+            Pow => "pow",
+            Atan2 => "atan2",
+            Min => "min",
+            Max => "max",
+            Mod => "mod",
+            Rem => "rem",
+            Lt => "lt",
+            Le => "le",
+            Gt => "gt",
+            Ge => "ge",
+            Eq => "eq",
+            Ne => "ne",
+            And => "and",
+            Or => "or",
+        }
+    }
+}
+
+/// 1.0 for true, 0.0 for false.
+#[inline]
+pub fn truth(b: bool) -> f64 {
+    if b {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+#[inline]
+pub fn sign(a: f64) -> f64 {
+    if a > 0.0 {
+        1.0
+    } else if a < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// `min` that propagates NaN (f64::min would hide a NaN argument, and with it
+/// an undefined region of the model).
+#[inline]
+pub fn fmin(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+#[inline]
+pub fn fmax(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Triangle wave with period 2: 0 at odd-minus-half points (u = -1/2 + 2k),
+/// 1 at u = 1/2 + 2k, 1/2 at integers. Equal to `1/2 + asin(sin(pi u))/pi`.
+#[inline]
+pub fn tri_wave(u: f64) -> f64 {
+    let s = 0.5 * u + 0.25;
+    1.0 - (2.0 * (s - s.floor()) - 1.0).abs()
+}
+
+/// Sawtooth with period 1: `1/2 + u - floor(u + 1/2)`, in [0, 1).
+#[inline]
+pub fn saw_wave(u: f64) -> f64 {
+    0.5 + u - (u + 0.5).floor()
+}

@@ -1,0 +1,151 @@
+//! Symbolic differentiation of expressions, for operations whose definition
+//! contains a gradient (the normalised offset, Eq. 14). The derivative rules
+//! mirror `eval::deriv`, written as expressions.
+
+use crate::expr::{Expr, ExprNode};
+use crate::ops::{BinaryOp, UnaryOp};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+type Grad = [Expr; 3];
+
+fn zero() -> Grad {
+    [Expr::constant(0.0), Expr::constant(0.0), Expr::constant(0.0)]
+}
+
+fn is_zero(e: &Expr) -> bool {
+    e.as_const() == Some(0.0)
+}
+
+/// `d * k` per component, skipping known zeros.
+fn scale(d: &Grad, k: &Expr) -> Grad {
+    std::array::from_fn(|i| {
+        if is_zero(&d[i]) {
+            Expr::constant(0.0)
+        } else {
+            &d[i] * k
+        }
+    })
+}
+
+fn add(a: &Grad, b: &Grad) -> Grad {
+    std::array::from_fn(|i| match (is_zero(&a[i]), is_zero(&b[i])) {
+        (true, _) => b[i].clone(),
+        (_, true) => a[i].clone(),
+        _ => &a[i] + &b[i],
+    })
+}
+
+impl Expr {
+    /// The gradient `(df/dx, df/dy, df/dz)` as expressions.
+    pub fn gradient(&self) -> [Expr; 3] {
+        let mut memo = HashMap::new();
+        grad(self, &mut memo)
+    }
+}
+
+fn grad(e: &Expr, memo: &mut HashMap<*const ExprNode, Grad>) -> Grad {
+    let key = Arc::as_ptr(&e.0);
+    if let Some(g) = memo.get(&key) {
+        return g.clone();
+    }
+    let g = match e.node() {
+        ExprNode::Var(a) => {
+            let mut g = zero();
+            g[*a as usize] = Expr::constant(1.0);
+            g
+        }
+        ExprNode::Const(_) | ExprNode::Param { .. } => zero(),
+        ExprNode::Unary(op, a) => {
+            let da = grad(a, memo);
+            scale(&da, &unary_factor(*op, a, e))
+        }
+        ExprNode::Binary(op, a, b) => {
+            let (da, db) = (grad(a, memo), grad(b, memo));
+            let (ka, kb) = binary_factors(*op, a, b, e);
+            add(&scale(&da, &ka), &scale(&db, &kb))
+        }
+        ExprNode::PowI(a, n) => {
+            let da = grad(a, memo);
+            scale(&da, &(*n as f64 * a.powi(n - 1)))
+        }
+        ExprNode::Select(c, a, b) => {
+            let (da, db) = (grad(a, memo), grad(b, memo));
+            std::array::from_fn(|i| Expr::select(c.clone(), da[i].clone(), db[i].clone()))
+        }
+        ExprNode::Field { field, comp, args } => {
+            if *comp != 0 {
+                // Second derivatives of data fields are not modelled.
+                zero()
+            } else {
+                let mut out = zero();
+                for (k, arg) in args.iter().enumerate() {
+                    let dk = grad(arg, memo);
+                    let part = Expr::field_comp(field.clone(), k as u8 + 1, args.clone());
+                    out = add(&out, &scale(&dk, &part));
+                }
+                out
+            }
+        }
+    };
+    memo.insert(key, g.clone());
+    g
+}
+
+fn unary_factor(op: UnaryOp, a: &Expr, v: &Expr) -> Expr {
+    use UnaryOp::*;
+    match op {
+        Neg => Expr::constant(-1.0),
+        Abs => a.sign(),
+        Sqrt => 0.5 / v,
+        Square => 2.0 * a,
+        Exp => v.clone(),
+        Ln => 1.0 / a,
+        Sin => a.cos(),
+        Cos => -a.sin(),
+        Tan => 1.0 + v.square(),
+        Asin => 1.0 / (1.0 - a.square()).sqrt(),
+        Acos => -1.0 / (1.0 - a.square()).sqrt(),
+        Atan => 1.0 / (1.0 + a.square()),
+        Sinh => a.cosh(),
+        Cosh => a.sinh(),
+        Tanh => 1.0 - v.square(),
+        Sign | Floor | Ceil | Trunc | Round | Not => Expr::constant(0.0),
+        Fract | Saw => Expr::constant(1.0),
+        Tri => {
+            let s = 0.5 * a + 0.25;
+            Expr::select(s.fract().lt(0.5), Expr::constant(1.0), Expr::constant(-1.0))
+        }
+    }
+}
+
+fn binary_factors(op: BinaryOp, a: &Expr, b: &Expr, v: &Expr) -> (Expr, Expr) {
+    use BinaryOp::*;
+    let c = Expr::constant;
+    match op {
+        Add => (c(1.0), c(1.0)),
+        Sub => (c(1.0), c(-1.0)),
+        Mul => (b.clone(), a.clone()),
+        Div => (1.0 / b, -(a / b.square())),
+        Pow => (
+            b * a.pow(b - 1.0),
+            Expr::select(a.gt(0.0), v * a.max(1e-300).ln(), c(0.0)),
+        ),
+        Atan2 => {
+            let r2 = a.square() + b.square();
+            (b / &r2, -(a / r2))
+        }
+        Min => {
+            let s = a.le(b);
+            (Expr::select(s.clone(), c(1.0), c(0.0)), Expr::select(s, c(0.0), c(1.0)))
+        }
+        Max => {
+            let s = a.ge(b);
+            (Expr::select(s.clone(), c(1.0), c(0.0)), Expr::select(s, c(0.0), c(1.0)))
+        }
+        Mod => (c(1.0), -(a / b).floor()),
+        Rem => (c(1.0), -(a / b).trunc()),
+        Lt | Le | Gt | Ge | Eq | Ne | And | Or => (c(0.0), c(0.0)),
+    }
+}
+
