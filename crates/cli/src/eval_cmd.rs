@@ -55,7 +55,11 @@ pub fn run(a: EvalArgs) -> Result<()> {
                 .collect::<Result<_, _>>()
                 .with_context(|| format!("stdin line {}: not a number in '{t}'", i + 1))?;
             if v.len() != 3 {
-                bail!("stdin line {}: expected 3 numbers (x y z), got {}", i + 1, v.len());
+                bail!(
+                    "stdin line {}: expected 3 numbers (x y z), got {}",
+                    i + 1,
+                    v.len()
+                );
             }
             emit([v[0], v[1], v[2]], &mut out)?;
         }

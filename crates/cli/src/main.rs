@@ -7,7 +7,11 @@ mod model;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "microfrep", version, about = "Function-based microstructures: model, check, mesh, slice")]
+#[command(
+    name = "microfrep",
+    version,
+    about = "Function-based microstructures: model, check, mesh, slice"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,

@@ -12,9 +12,7 @@ pub struct Model {
 /// Resolves a model argument: the name of a built-in example.
 pub fn load(spec: &str) -> Result<Model> {
     if let Some(ex) = examples::by_name(spec) {
-        return Ok(Model {
-            expr: (ex.build)(),
-        });
+        return Ok(Model { expr: (ex.build)() });
     }
     let names: Vec<&str> = examples::all().iter().map(|e| e.name).collect();
     bail!(
@@ -32,7 +30,10 @@ pub fn list_examples(only: Option<&str>) -> Result<()> {
     }
     for e in all.iter().filter(|e| only.is_none_or(|n| n == e.name)) {
         let (lo, hi) = e.bounds;
-        println!("{:<14} bounds {:?}..{:?}\n    {}", e.name, lo, hi, e.description);
+        println!(
+            "{:<14} bounds {:?}..{:?}\n    {}",
+            e.name, lo, hi, e.description
+        );
     }
     Ok(())
 }

@@ -25,7 +25,10 @@ pub enum ExprNode {
     Var(Axis),
     Const(f64),
     /// A named parameter whose value is chosen at evaluation time.
-    Param { name: Arc<str>, default: f64 },
+    Param {
+        name: Arc<str>,
+        default: f64,
+    },
     Unary(UnaryOp, Expr),
     Binary(BinaryOp, Expr, Expr),
     /// Integer power by repeated multiplication.
@@ -57,7 +60,14 @@ impl fmt::Debug for Expr {
             ExprNode::Select(c, a, b) => write!(f, "select({c:?}, {a:?}, {b:?})"),
             ExprNode::Field {
                 field, comp, args, ..
-            } => write!(f, "{}[{comp}]({:?}, {:?}, {:?})", field.name(), args[0], args[1], args[2]),
+            } => write!(
+                f,
+                "{}[{comp}]({:?}, {:?}, {:?})",
+                field.name(),
+                args[0],
+                args[1],
+                args[2]
+            ),
         }
     }
 }

@@ -201,7 +201,11 @@ impl Graph {
             (BinaryOp::Min | BinaryOp::Max, _, _) if a == b => return a,
             _ => {}
         }
-        let (a, b) = if op.commutative() && b < a { (b, a) } else { (a, b) };
+        let (a, b) = if op.commutative() && b < a {
+            (b, a)
+        } else {
+            (a, b)
+        };
         self.intern(Node::Binary(op, a, b))
     }
 

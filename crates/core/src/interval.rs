@@ -243,8 +243,7 @@ impl Interval {
             }
             Tri => tri_bounds(self),
             Saw => {
-                if (self.lo + 0.5).floor() == (self.hi + 0.5).floor() && self.width().is_finite()
-                {
+                if (self.lo + 0.5).floor() == (self.hi + 0.5).floor() && self.width().is_finite() {
                     self.mono_inc(ops::saw_wave)
                 } else {
                     UNIT

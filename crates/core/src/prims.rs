@@ -7,7 +7,11 @@ use crate::transform::P3;
 
 /// A constant vector as expressions.
 pub fn v3(a: [f64; 3]) -> P3 {
-    [Expr::constant(a[0]), Expr::constant(a[1]), Expr::constant(a[2])]
+    [
+        Expr::constant(a[0]),
+        Expr::constant(a[1]),
+        Expr::constant(a[2]),
+    ]
 }
 
 fn d(p: &P3, c: &P3) -> P3 {

@@ -10,7 +10,11 @@ use std::sync::Arc;
 type Grad = [Expr; 3];
 
 fn zero() -> Grad {
-    [Expr::constant(0.0), Expr::constant(0.0), Expr::constant(0.0)]
+    [
+        Expr::constant(0.0),
+        Expr::constant(0.0),
+        Expr::constant(0.0),
+    ]
 }
 
 fn is_zero(e: &Expr) -> bool {
@@ -137,15 +141,20 @@ fn binary_factors(op: BinaryOp, a: &Expr, b: &Expr, v: &Expr) -> (Expr, Expr) {
         }
         Min => {
             let s = a.le(b);
-            (Expr::select(s.clone(), c(1.0), c(0.0)), Expr::select(s, c(0.0), c(1.0)))
+            (
+                Expr::select(s.clone(), c(1.0), c(0.0)),
+                Expr::select(s, c(0.0), c(1.0)),
+            )
         }
         Max => {
             let s = a.ge(b);
-            (Expr::select(s.clone(), c(1.0), c(0.0)), Expr::select(s, c(0.0), c(1.0)))
+            (
+                Expr::select(s.clone(), c(1.0), c(0.0)),
+                Expr::select(s, c(0.0), c(1.0)),
+            )
         }
         Mod => (c(1.0), -(a / b).floor()),
         Rem => (c(1.0), -(a / b).trunc()),
         Lt | Le | Gt | Ge | Eq | Ne | And | Or => (c(0.0), c(0.0)),
     }
 }
-

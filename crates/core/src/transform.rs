@@ -63,9 +63,21 @@ pub fn rotate(p: &P3, axis: [f64; 3], angle: f64) -> P3 {
     let (c, s) = (angle.cos(), -angle.sin());
     let t = 1.0 - c;
     let m = [
-        [t * k[0] * k[0] + c, t * k[0] * k[1] - s * k[2], t * k[0] * k[2] + s * k[1]],
-        [t * k[0] * k[1] + s * k[2], t * k[1] * k[1] + c, t * k[1] * k[2] - s * k[0]],
-        [t * k[0] * k[2] - s * k[1], t * k[1] * k[2] + s * k[0], t * k[2] * k[2] + c],
+        [
+            t * k[0] * k[0] + c,
+            t * k[0] * k[1] - s * k[2],
+            t * k[0] * k[2] + s * k[1],
+        ],
+        [
+            t * k[0] * k[1] + s * k[2],
+            t * k[1] * k[1] + c,
+            t * k[1] * k[2] - s * k[0],
+        ],
+        [
+            t * k[0] * k[2] - s * k[1],
+            t * k[1] * k[2] + s * k[0],
+            t * k[2] * k[2] + c,
+        ],
     ];
     linear(p, m, [0.0; 3])
 }
@@ -100,9 +112,21 @@ fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
     }
     let c = |a: usize, b: usize, cc: usize, d: usize| m[a][b] * m[cc][d] - m[a][d] * m[cc][b];
     Some([
-        [c(1, 1, 2, 2) / det, -c(0, 1, 2, 2) / det, c(0, 1, 1, 2) / det],
-        [-c(1, 0, 2, 2) / det, c(0, 0, 2, 2) / det, -c(0, 0, 1, 2) / det],
-        [c(1, 0, 2, 1) / det, -c(0, 0, 2, 1) / det, c(0, 0, 1, 1) / det],
+        [
+            c(1, 1, 2, 2) / det,
+            -c(0, 1, 2, 2) / det,
+            c(0, 1, 1, 2) / det,
+        ],
+        [
+            -c(1, 0, 2, 2) / det,
+            c(0, 0, 2, 2) / det,
+            -c(0, 0, 1, 2) / det,
+        ],
+        [
+            c(1, 0, 2, 1) / det,
+            -c(0, 0, 2, 1) / det,
+            c(0, 0, 1, 1) / det,
+        ],
     ])
 }
 

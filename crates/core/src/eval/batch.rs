@@ -40,12 +40,19 @@ impl<'t> BatchEval<'t> {
     /// Evaluates output `k` (see [`Tape::with_outputs`]).
     pub fn eval_output(&mut self, k: usize, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
         let n = out.len();
-        assert!(x.len() == n && y.len() == n && z.len() == n, "slice lengths differ");
+        assert!(
+            x.len() == n && y.len() == n && z.len() == n,
+            "slice lengths differ"
+        );
         let o = self.tape.outputs[k] as usize;
         let mut start = 0;
         while start < n {
             let len = BLOCK.min(n - start);
-            self.load(&x[start..start + len], &y[start..start + len], &z[start..start + len]);
+            self.load(
+                &x[start..start + len],
+                &y[start..start + len],
+                &z[start..start + len],
+            );
             self.run(len);
             out[start..start + len].copy_from_slice(&self.regs[o][..len]);
             start += len;

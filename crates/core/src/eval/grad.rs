@@ -146,7 +146,10 @@ impl<'t> GradBatchEval<'t> {
     /// Fills `out` with value and gradient `[v, dx, dy, dz]` at each point.
     pub fn eval(&mut self, x: &[f32], y: &[f32], z: &[f32], out: &mut [[f32; 4]]) {
         let n = out.len();
-        assert!(x.len() == n && y.len() == n && z.len() == n, "slice lengths differ");
+        assert!(
+            x.len() == n && y.len() == n && z.len() == n,
+            "slice lengths differ"
+        );
         for start in (0..n).step_by(BLOCK) {
             for i in start..(start + BLOCK).min(n) {
                 let (v, g) = self.inner.eval([x[i] as f64, y[i] as f64, z[i] as f64]);
