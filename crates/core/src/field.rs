@@ -49,6 +49,8 @@ pub struct GridField {
 pub enum GridError {
     #[error("grid needs at least 2 samples on each axis, got {0:?}")]
     TooSmall([usize; 3]),
+    #[error("grid of {0:?} samples exceeds the limit of {MAX_SAMPLES}")]
+    TooLarge([usize; 3]),
     #[error("grid has {got} values, dims {dims:?} need {want}")]
     WrongLength {
         dims: [usize; 3],
@@ -61,6 +63,21 @@ pub enum GridError {
     NotFinite { index: usize },
 }
 
+/// Most samples a grid may hold (2 GiB of f64), so that a bad size is an
+/// error rather than an allocation failure.
+pub const MAX_SAMPLES: usize = 1 << 28;
+
+/// Number of samples for `dims`, checked against the limits.
+fn sample_count(dims: [usize; 3]) -> Result<usize, GridError> {
+    if dims.iter().any(|&d| d < 2) {
+        return Err(GridError::TooSmall(dims));
+    }
+    dims.iter()
+        .try_fold(1usize, |n, &d| n.checked_mul(d))
+        .filter(|&n| n <= MAX_SAMPLES)
+        .ok_or(GridError::TooLarge(dims))
+}
+
 impl GridField {
     pub fn new(
         name: &str,
@@ -69,10 +86,7 @@ impl GridField {
         max: [f64; 3],
         values: Vec<f64>,
     ) -> Result<GridField, GridError> {
-        if dims.iter().any(|&d| d < 2) {
-            return Err(GridError::TooSmall(dims));
-        }
-        let want = dims[0] * dims[1] * dims[2];
+        let want = sample_count(dims)?;
         if values.len() != want {
             return Err(GridError::WrongLength {
                 dims,
@@ -129,7 +143,7 @@ impl GridField {
         max: [f64; 3],
         f: impl Fn([f64; 3]) -> f64,
     ) -> Result<GridField, GridError> {
-        let mut v = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
+        let mut v = Vec::with_capacity(sample_count(dims)?);
         for k in 0..dims[2] {
             for j in 0..dims[1] {
                 for i in 0..dims[0] {

@@ -26,6 +26,11 @@ fn scale_alpha(e: Expr, alpha: &Expr) -> Expr {
 
 /// R-function union `(f1 + f2 + sqrt(f1^2 + f2^2 - 2 a f1 f2)) / (1 + a)`;
 /// `alpha = 1` is exactly `max`, `alpha = 0` is HyperFun's `|`.
+///
+/// For alpha in [0, 1] the result is `>= 0` exactly when either argument is
+/// (tested for |f1|/|f2| up to 1e14; near 1/eps the smaller argument is lost
+/// to rounding in `f1 + f2`). The same holds for the intersection and
+/// subtraction.
 pub fn union(f1: &Expr, f2: &Expr, alpha: impl Into<Expr>) -> Expr {
     let alpha = alpha.into();
     if alpha.as_const() == Some(1.0) {

@@ -1,9 +1,12 @@
 //! Interval arithmetic with sound bounds.
 //!
 //! Contract: for every op, the result contains the f64 reference value
-//! (`ops.rs`) at every point of the argument boxes where that value is not NaN.
-//! A NaN bound means "nothing is known" (consumers must treat it as the whole
-//! line). IEEE `+ - * /` and `sqrt` are correctly rounded and monotone, so their
+//! (`ops.rs`) at every point of the argument boxes where that value is not NaN,
+//! and [`Interval::may_be_nan`] is set wherever some such value may be NaN.
+//! The flag matters because comparisons, logic, `sign` and `select` turn a NaN
+//! (an undefined sub-expression, e.g. `sqrt` of a negative) into 0 or 1, so
+//! their bounds must include that outcome. A NaN bound means "nothing is
+//! known" (consumers must treat it as the whole line). IEEE `+ - * /` and `sqrt` are correctly rounded and monotone, so their
 //! endpoint formulas bound the point values exactly; libm functions are only
 //! faithful, so their results are widened by a few ulps.
 
@@ -14,13 +17,20 @@ use std::f64::consts::{FRAC_PI_2, PI};
 pub struct Interval {
     pub lo: f64,
     pub hi: f64,
+    /// Some point value covered by this bound may be NaN.
+    nan: bool,
 }
 
 const ENTIRE: Interval = Interval {
     lo: f64::NEG_INFINITY,
     hi: f64::INFINITY,
+    nan: false,
 };
-const UNIT: Interval = Interval { lo: 0.0, hi: 1.0 };
+const UNIT: Interval = Interval {
+    lo: 0.0,
+    hi: 1.0,
+    nan: false,
+};
 
 fn down(v: f64) -> f64 {
     v.next_down().next_down()
@@ -33,15 +43,24 @@ impl Interval {
     pub const ENTIRE: Interval = ENTIRE;
 
     pub fn new(lo: f64, hi: f64) -> Interval {
-        Interval { lo, hi }
+        Interval { lo, hi, nan: false }
     }
     pub fn point(v: f64) -> Interval {
-        Interval { lo: v, hi: v }
+        Interval::new(v, v)
     }
     pub fn nan() -> Interval {
+        Interval::new(f64::NAN, f64::NAN)
+    }
+    /// Whether a point value covered by this bound may be NaN (also true
+    /// for the "nothing known" NaN bound).
+    pub fn may_be_nan(&self) -> bool {
+        self.nan || self.is_nan()
+    }
+    /// This bound, also covering NaN values.
+    pub fn with_nan(self, nan: bool) -> Interval {
         Interval {
-            lo: f64::NAN,
-            hi: f64::NAN,
+            nan: self.nan || nan,
+            ..self
         }
     }
     pub fn is_nan(&self) -> bool {
@@ -60,7 +79,7 @@ impl Interval {
         if self.is_nan() || o.is_nan() {
             return Interval::nan();
         }
-        Interval::new(self.lo.min(o.lo), self.hi.max(o.hi))
+        Interval::new(self.lo.min(o.lo), self.hi.max(o.hi)).with_nan(self.nan || o.nan)
     }
     /// Widens by two ulps on each side (for libm results).
     fn widen(self) -> Interval {
@@ -105,12 +124,8 @@ impl Interval {
     }
     pub fn div(self, o: Interval) -> Interval {
         if o.lo <= 0.0 && o.hi >= 0.0 {
-            return if o.lo == 0.0 && o.hi == 0.0 && self.lo > 0.0 {
-                // x / 0 with x > 0 is +inf or -inf depending on the zero's sign.
-                ENTIRE
-            } else {
-                ENTIRE
-            };
+            // Division by (values near) zero: anything, infinities included.
+            return ENTIRE;
         }
         let c = [
             self.lo / o.lo,
@@ -146,15 +161,15 @@ impl Interval {
         Interval::new(self.lo.max(0.0).sqrt(), self.hi.sqrt())
     }
     pub fn powi(self, n: i32) -> Interval {
+        if self.is_nan() {
+            return self;
+        }
         if n == 0 {
             return Interval::point(1.0);
         }
-        if n < 0 {
-            return self.powi(-n).recip().widen();
-        }
-        let base = if n % 2 == 0 { self.abs() } else { self };
-        // powi is not guaranteed correctly rounded: widen.
-        Interval::new(base.lo.powi(n), base.hi.powi(n)).widen()
+        // Square-and-multiply (what powi compiles to) rounds monotonically, so
+        // the end values bound it; no negation of n, which could overflow.
+        integer_power(self, n % 2 != 0, n < 0, |v| v.powi(n)).with_nan(self.nan)
     }
     pub fn min(self, o: Interval) -> Interval {
         Interval::new(self.lo.min(o.lo), self.hi.min(o.hi))
@@ -168,14 +183,29 @@ impl Interval {
         periodic_bounds(self, 0.0, f64::sin)
     }
     pub fn cos(self) -> Interval {
-        periodic_bounds(self, FRAC_PI_2, f64::cos)
+        // cos(t) = sin(t + pi/2): maxima at 2k pi.
+        periodic_bounds(self, -FRAC_PI_2, f64::cos)
     }
 
     pub fn unary(self, op: UnaryOp) -> Interval {
-        use UnaryOp::*;
         if self.is_nan() {
             return self;
         }
+        let r = self.unary_values(op);
+        if matches!(op, UnaryOp::Sign | UnaryOp::Not) {
+            // NaN maps to 0 here: a value, not a NaN.
+            return if self.nan {
+                r.hull(Interval::point(op.apply(f64::NAN)))
+            } else {
+                r
+            };
+        }
+        r.with_nan(self.nan || unary_makes_nan(op, self))
+    }
+
+    /// Bounds of the non-NaN values of a unary op.
+    fn unary_values(self, op: UnaryOp) -> Interval {
+        use UnaryOp::*;
         match op {
             Neg => self.neg(),
             Abs => self.abs(),
@@ -201,10 +231,13 @@ impl Interval {
                 // tan is increasing between poles at pi/2 + k pi.
                 let k_lo = ((self.lo - FRAC_PI_2) / PI).floor();
                 let k_hi = ((self.hi - FRAC_PI_2) / PI).floor();
-                if k_lo != k_hi || self.width() >= PI || !self.width().is_finite() {
+                let (a, b) = (self.lo.tan(), self.hi.tan());
+                // The rounded pole test can misplace an end lying within an ulp
+                // of a pole; an inverted pair of values reveals that.
+                if k_lo != k_hi || self.width() >= PI || !self.width().is_finite() || a > b {
                     ENTIRE
                 } else {
-                    self.mono_inc(f64::tan).widen()
+                    Interval::new(a, b).widen()
                 }
             }
             Asin => {
@@ -258,6 +291,18 @@ impl Interval {
         if self.is_nan() || o.is_nan() {
             return Interval::nan();
         }
+        let r = self.binary_values(op, o);
+        let nan_in = self.nan || o.nan;
+        if matches!(op, Lt | Le | Gt | Ge | Eq | Ne | And | Or) {
+            // Truth values: a NaN argument gives 0 or 1, never NaN.
+            return if nan_in { r.hull(UNIT) } else { r };
+        }
+        r.with_nan(nan_in || binary_makes_nan(op, self, o))
+    }
+
+    /// Bounds of the non-NaN values of a binary op.
+    fn binary_values(self, op: BinaryOp, o: Interval) -> Interval {
+        use BinaryOp::*;
         match op {
             Add => self.add(o),
             Sub => self.sub(o),
@@ -267,34 +312,18 @@ impl Interval {
             Atan2 => atan2_bounds(self, o),
             Min => self.min(o),
             Max => self.max(o),
-            Mod => {
-                // a - b floor(a/b): exact when a single period holds a, else [0, b) or (b, 0].
-                if o.lo == o.hi && o.lo != 0.0 && o.lo.is_finite() {
-                    let b = o.lo;
-                    let (q0, q1) = ((self.lo / b).floor(), (self.hi / b).floor());
-                    if q0 == q1 && self.width().is_finite() {
-                        let (a0, a1) = (self.lo - b * q0, self.hi - b * q0);
-                        return Interval::new(a0.min(a1), a0.max(a1)).widen();
-                    }
-                }
-                let m = o.lo.abs().max(o.hi.abs());
-                if o.lo > 0.0 {
-                    Interval::new(0.0, o.hi)
-                } else if o.hi < 0.0 {
-                    Interval::new(o.lo, 0.0)
-                } else {
-                    Interval::new(-m, m)
-                }
-            }
+            Mod => mod_bounds(self, o),
             Rem => {
                 let m = o.lo.abs().max(o.hi.abs());
                 if !(m > 0.0) {
                     return Interval::nan();
                 }
-                if self.lo > -m && self.hi < m && o.lo.abs().min(o.hi.abs()) > self.abs().hi {
+                let b_apart = o.lo > 0.0 || o.hi < 0.0;
+                if b_apart && o.abs().lo > self.abs().hi {
                     // |a| < |b| everywhere: fmod returns a unchanged.
                     return self;
                 }
+                // fmod is exact: the sign of a, |r| <= |a| and |r| < |b|.
                 let lo = if self.lo >= 0.0 { 0.0 } else { self.lo.max(-m) };
                 let hi = if self.hi <= 0.0 { 0.0 } else { self.hi.min(m) };
                 Interval::new(lo, hi)
@@ -324,6 +353,11 @@ impl Interval {
 
     /// `cond != 0 ? a : b`.
     pub fn select(c: Interval, a: Interval, b: Interval) -> Interval {
+        if c.nan {
+            // A NaN condition counts as true.
+            let r = Interval::select(Interval { nan: false, ..c }, a, b);
+            return r.hull(a);
+        }
         if definitely_true(c) {
             a
         } else if definitely_false(c) {
@@ -331,6 +365,42 @@ impl Interval {
         } else {
             a.hull(b)
         }
+    }
+}
+
+fn infinite_end(a: Interval) -> bool {
+    a.lo == f64::NEG_INFINITY || a.hi == f64::INFINITY
+}
+fn has_zero(a: Interval) -> bool {
+    a.lo <= 0.0 && a.hi >= 0.0
+}
+
+/// Whether a unary op can produce NaN from a non-NaN value of `a`.
+fn unary_makes_nan(op: UnaryOp, a: Interval) -> bool {
+    use UnaryOp::*;
+    match op {
+        Sqrt | Ln => a.lo < 0.0,
+        Asin | Acos => a.lo < -1.0 || a.hi > 1.0,
+        // inf - inf inside, or libm's sin(inf).
+        Sin | Cos | Tan | Fract | Tri | Saw => infinite_end(a),
+        _ => false,
+    }
+}
+
+/// Whether a binary op can produce NaN from non-NaN values of `a` and `b`.
+fn binary_makes_nan(op: BinaryOp, a: Interval, b: Interval) -> bool {
+    use BinaryOp::*;
+    let (ninf, pinf) = (f64::NEG_INFINITY, f64::INFINITY);
+    match op {
+        Add => (a.lo == ninf && b.hi == pinf) || (a.hi == pinf && b.lo == ninf),
+        Sub => (a.lo == ninf && b.lo == ninf) || (a.hi == pinf && b.hi == pinf),
+        Mul => (has_zero(a) && infinite_end(b)) || (has_zero(b) && infinite_end(a)),
+        Div => (has_zero(a) && has_zero(b)) || (infinite_end(a) && infinite_end(b)),
+        // Negative base with a non-integer exponent.
+        Pow => a.lo < 0.0 && !(b.lo == b.hi && b.lo == b.lo.trunc()),
+        Mod => has_zero(b) || infinite_end(a) || infinite_end(b),
+        Rem => has_zero(b) || infinite_end(a),
+        _ => false,
     }
 }
 
@@ -354,7 +424,7 @@ fn compare(always: bool, never: bool) -> Interval {
 }
 
 /// Bounds of a 2pi-periodic function with maxima at `phase + pi/2 + 2k pi`
-/// and minima at `phase - pi/2 + 2k pi` (sin: phase 0, cos: phase pi/2).
+/// and minima at `phase - pi/2 + 2k pi` (sin: phase 0, cos: phase -pi/2).
 fn periodic_bounds(v: Interval, phase: f64, f: fn(f64) -> f64) -> Interval {
     if !(v.width() < 2.0 * PI) || !v.lo.is_finite() || !v.hi.is_finite() {
         return Interval::new(-1.0, 1.0);
@@ -397,36 +467,96 @@ fn tri_bounds(v: Interval) -> Interval {
     Interval::new(down(lo).max(0.0), up(hi).min(1.0))
 }
 
+/// Floored modulo `a - b floor(a/b)`.
+fn mod_bounds(a: Interval, b: Interval) -> Interval {
+    if b.lo == b.hi && b.lo != 0.0 && b.lo.is_finite() && a.width().is_finite() {
+        // With one quotient over the whole box the result is monotone in a.
+        let q = b.lo;
+        let (q0, q1) = ((a.lo / q).floor(), (a.hi / q).floor());
+        if q0 == q1 {
+            let (r0, r1) = (a.lo - q * q0, a.hi - q * q0);
+            return Interval::new(r0.min(r1), r0.max(r1)).widen();
+        }
+    }
+    // Near b = 0, or when a/b overflows, the result can be anything.
+    let amax = a.abs().hi;
+    if !(b.lo > 0.0 || b.hi < 0.0) || !(amax / b.abs().lo).is_finite() {
+        return ENTIRE;
+    }
+    // In exact arithmetic the result lies between 0 and b; the rounded
+    // quotient and product can leave that range by about 2 ulps of |a|.
+    let e = 4.0 * f64::EPSILON * amax;
+    if b.lo > 0.0 {
+        Interval::new(-e, b.hi + e)
+    } else {
+        Interval::new(b.lo - e, e)
+    }
+}
+
+/// Bounds of `f = v^n` for an integer `n` (odd or even, negative or not):
+/// `|v|^n` is monotone in `|v|`, odd powers keep the sign, negative powers
+/// have a pole at 0.
+fn integer_power(a: Interval, odd: bool, neg: bool, f: impl Fn(f64) -> f64) -> Interval {
+    let has_zero = a.lo <= 0.0 && a.hi >= 0.0;
+    let r = match (odd, neg) {
+        (true, false) => Interval::new(f(a.lo), f(a.hi)),
+        (false, false) => Interval::new(f(a.abs().lo), f(a.abs().hi)),
+        (true, true) if has_zero => ENTIRE,
+        (true, true) => Interval::new(f(a.hi), f(a.lo)),
+        (false, true) => Interval::new(f(a.abs().hi), f(a.abs().lo)),
+    };
+    r.widen()
+}
+
 fn pow_bounds(a: Interval, b: Interval) -> Interval {
-    if b.lo == b.hi && b.lo == b.lo.trunc() && b.lo.abs() < 1e9 {
-        // powf with an integer exponent agrees with the sign rules of powi.
-        let n = b.lo as i32;
-        let r = a.powi(n);
-        return r.hull(a.powi(n)).widen();
+    if b.lo == b.hi && b.lo == b.lo.trunc() && b.lo.is_finite() {
+        // powf with an integer exponent follows the sign rules of powi.
+        let e = b.lo;
+        if e == 0.0 {
+            return Interval::point(1.0);
+        }
+        return integer_power(a, e % 2.0 != 0.0, e < 0.0, |v| v.powf(e));
+    }
+    // Negative bases give real values only at integer exponents, +-|a|^b;
+    // -0 matters too, as (-0)^b is -inf for negative odd b.
+    let has_integer = b.lo.ceil() <= b.hi;
+    if has_integer && (a.lo < 0.0 || (a.lo == 0.0 && b.lo < 0.0)) {
+        let m = nonneg_pow(a.abs(), b);
+        return if m.is_nan() {
+            ENTIRE
+        } else {
+            Interval::new(-m.hi, m.hi)
+        };
     }
     if a.hi < 0.0 {
         return Interval::nan();
     }
-    // For a >= 0: a^b = exp(b ln a); treat ln(0) = -inf.
-    let pos = Interval::new(a.lo.max(0.0), a.hi);
+    let r = nonneg_pow(Interval::new(a.lo.max(0.0), a.hi), b);
+    if a.lo == f64::NEG_INFINITY {
+        // Unlike finite negative bases, (-inf)^b is a value: +inf or +0.
+        r.hull(Interval::new(0.0, f64::INFINITY))
+    } else {
+        r
+    }
+}
+
+/// `a^b` for `a >= 0`.
+fn nonneg_pow(pos: Interval, b: Interval) -> Interval {
+    // A -0 end would give (-0)^b, which differs from 0^b in sign.
+    let pos = Interval::new(pos.lo.abs(), pos.hi.abs());
     let corners = [
         pos.lo.powf(b.lo),
         pos.lo.powf(b.hi),
         pos.hi.powf(b.lo),
         pos.hi.powf(b.hi),
     ];
-    let mut lo = corners.iter().cloned().fold(f64::INFINITY, f64::min);
-    let mut hi = corners.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    // a^b is monotone in a for fixed b and in b for fixed a, except that the
-    // direction in b flips at a = 1 and the direction in a flips at b = 0: the
-    // extremes still lie on corners, plus the value 1 when a or b crosses.
-    if (pos.lo <= 1.0 && pos.hi >= 1.0) || (b.lo <= 0.0 && b.hi >= 0.0) {
-        lo = lo.min(1.0);
-        hi = hi.max(1.0);
-    }
     if corners.iter().any(|c| c.is_nan()) {
         return ENTIRE;
     }
+    // a^b is monotone in a for fixed b and in b for fixed a, so the extremes
+    // over the box lie on its corners.
+    let lo = corners.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = corners.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     Interval::new(down(lo).max(0.0), up(hi))
 }
 

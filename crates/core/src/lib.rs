@@ -19,6 +19,7 @@ pub mod field;
 pub mod frep;
 pub mod graph;
 pub mod interval;
+pub mod noise;
 pub mod ops;
 pub mod prims;
 pub mod simd_math;

@@ -132,7 +132,8 @@ fn binary_factors(op: BinaryOp, a: &Expr, b: &Expr, v: &Expr) -> (Expr, Expr) {
         Mul => (b.clone(), a.clone()),
         Div => (1.0 / b, -(a / b.square())),
         Pow => (
-            b * a.pow(b - 1.0),
+            // As in `eval::deriv`: 0 at b = 0, where b a^(b-1) would be 0 * inf at a = 0.
+            Expr::select(b.eq_(0.0), c(0.0), b * a.pow(b - 1.0)),
             Expr::select(a.gt(0.0), v * a.max(1e-300).ln(), c(0.0)),
         ),
         Atan2 => {

@@ -107,9 +107,9 @@ impl Tape {
         }
         // Last reader of each node; roots live to the end.
         let mut last_use = vec![0usize; n];
-        for i in 0..n {
+        for (i, node) in g.nodes().iter().enumerate() {
             if live[i] {
-                for c in children(&g.nodes()[i]) {
+                for c in children(node) {
                     last_use[c.0 as usize] = i;
                 }
             }

@@ -53,11 +53,13 @@ impl<'t> IntervalEval<'t> {
                 } => {
                     let q = args.map(|a| r[a as usize]);
                     let f = &self.tape.fields[field as usize];
-                    r[out as usize] = if comp == 0 {
+                    let v = if comp == 0 {
                         f.interval(q)
                     } else {
                         f.grad_interval(q)[comp as usize - 1]
                     };
+                    // A NaN coordinate makes the field NaN.
+                    r[out as usize] = v.with_nan(q.iter().any(Interval::may_be_nan));
                 }
             }
         }

@@ -1,0 +1,97 @@
+//! Primitives with HyperFun's exact formulas (`LIBRARY.md` sections 1, 2, 5)
+//! plus half-spaces. Each takes the (possibly already mapped) point `p`;
+//! every scalar parameter is an [`Expr`], so it may be a field.
+//!
+//! HyperFun's sentinel values and point-array length checks are left to the
+//! HyperFun front end; each function names the `hf*` call it implements.
+//! List arguments are slices of triples (`[Expr; 3]`) or of scalars; a list
+//! too short for the primitive count gives a [`PrimError`].
+
+mod basic;
+mod blobs;
+mod conv;
+mod conv_arc;
+mod dellipsoid;
+mod distance;
+
+pub use basic::*;
+pub use blobs::*;
+pub use conv::*;
+pub use conv_arc::*;
+pub use dellipsoid::*;
+pub use distance::*;
+
+use crate::expr::Expr;
+use crate::transform::P3;
+
+/// HyperFun's `EPS`, used by several primitives' guards.
+pub const HF_EPS: f64 = 1e-6;
+
+/// Bad list arguments of a primitive.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PrimError {
+    #[error("{prim}: list `{arg}` has {got} entries, {need} needed")]
+    TooFew {
+        prim: &'static str,
+        arg: &'static str,
+        need: usize,
+        got: usize,
+    },
+    #[error("{prim}: triangle {tri} refers to vertex {index}, only {count} given")]
+    BadIndex {
+        prim: &'static str,
+        tri: usize,
+        index: usize,
+        count: usize,
+    },
+    #[error("{prim}: segment {index} has zero length")]
+    ZeroSegment { prim: &'static str, index: usize },
+}
+
+/// A constant vector as expressions.
+pub fn v3(a: [f64; 3]) -> P3 {
+    [
+        Expr::constant(a[0]),
+        Expr::constant(a[1]),
+        Expr::constant(a[2]),
+    ]
+}
+
+/// The other two axes of `axis`, in increasing order.
+pub fn others(axis: usize) -> (usize, usize) {
+    match axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    }
+}
+
+fn sub(a: &P3, b: &P3) -> P3 {
+    [&a[0] - &b[0], &a[1] - &b[1], &a[2] - &b[2]]
+}
+
+fn dot(a: &P3, b: &P3) -> Expr {
+    &a[0] * &b[0] + &a[1] * &b[1] + &a[2] * &b[2]
+}
+
+fn norm2(a: &P3) -> Expr {
+    a[0].square() + a[1].square() + a[2].square()
+}
+
+/// Errors unless `list` has at least `need` entries.
+fn need<T>(
+    prim: &'static str,
+    arg: &'static str,
+    list: &[T],
+    need: usize,
+) -> Result<(), PrimError> {
+    if list.len() < need {
+        return Err(PrimError::TooFew {
+            prim,
+            arg,
+            need,
+            got: list.len(),
+        });
+    }
+    Ok(())
+}
