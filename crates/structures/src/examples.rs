@@ -1,8 +1,9 @@
 //! Built-in example models, built with the Rust API.
 
+use crate::infill::{shell_with_infill, Join};
 use crate::lattice::{rod_lattice, Slabs};
 use crate::replicate::{replicate, Wave};
-use microfrep_core::frep::{intersection, subtraction, union, union_all};
+use microfrep_core::frep::{intersection, union_all};
 use microfrep_core::prims::{block, sphere, torus, v3};
 use microfrep_core::Expr;
 
@@ -82,12 +83,8 @@ pub fn shell_lattice() -> Expr {
     shell_with_lattice(&unit_sphere(), 0.2, &Slabs::uniform(12.0, 0.4), 0.0)
 }
 
-/// Shell with infill (Eq. 8): `F_s = F \ (F - l_o)`, `F_g = g & F`, result `F_s | F_g`.
+/// Shell with a rod-lattice infill (Eq. 8), plain union.
 pub fn shell_with_lattice(f: &Expr, l_o: f64, slabs: &Slabs, alpha: f64) -> Expr {
-    let p = Expr::xyz();
-    let inner = f - l_o;
-    let shell = subtraction(f, &inner, alpha);
-    let g = rod_lattice(&p, slabs, alpha);
-    let infill = intersection(&g, f, alpha);
-    union(&shell, &infill, alpha)
+    let g = rod_lattice(&Expr::xyz(), slabs, alpha);
+    shell_with_infill(f, l_o, &g, alpha, &Join::Plain)
 }

@@ -1,6 +1,6 @@
 //! Rod lattices from periodic slabs (Pasko et al. 2009, Eqs. 4-6).
 
-use microfrep_core::frep::{intersection, union};
+use microfrep_core::frep::{blend_union, intersection, union, Blend};
 use microfrep_core::transform::P3;
 use microfrep_core::Expr;
 
@@ -39,6 +39,16 @@ pub fn rod_lattice(p: &P3, slabs: &Slabs, alpha: f64) -> Expr {
     let ry = intersection(&s[0], &s[2], alpha);
     let rz = intersection(&s[0], &s[1], alpha);
     union(&union(&rx, &ry, alpha), &rz, alpha)
+}
+
+/// Rod lattice with blended junctions (Eq. 7): the rods are joined by the
+/// blended union, so `a0 > 0` adds fillets where rods meet.
+pub fn blended_rod_lattice(p: &P3, slabs: &Slabs, alpha: f64, blend: &Blend) -> Expr {
+    let s: Vec<Expr> = (0..3).map(|i| slabs.slab(p, i)).collect();
+    let rx = intersection(&s[1], &s[2], alpha);
+    let ry = intersection(&s[0], &s[2], alpha);
+    let rz = intersection(&s[0], &s[1], alpha);
+    blend_union(&blend_union(&rx, &ry, blend, alpha), &rz, blend, alpha)
 }
 
 /// Volume fraction of the alpha = 1 lattice with equal parameters on all

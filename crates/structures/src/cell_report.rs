@@ -1,0 +1,134 @@
+//! Checks a unit cell before replication (Fryazinov et al. Eqs. 4-6): its
+//! opposite faces are sampled on an `n x n` grid and compared.
+//!
+//! - geometric connectivity: the zero sets agree, tested as sign agreement
+//!   (`f >= 0` on both faces or on neither) at every sample;
+//! - full connectivity: the values agree within `tol`, so the sawtooth wave
+//!   gives a continuous (C0) field;
+//! - symmetry about the centre on an axis: `f(c + d) = f(c - d)` within `tol`
+//!   on an `n^3` grid, so the triangle wave (which mirrors every second cell)
+//!   reproduces the cell pattern unchanged.
+
+use crate::error::{check_box, check_resolution, Error, Result};
+use microfrep_core::Expr;
+use microfrep_core::{PointEval, Tape};
+
+/// What one axis of the cell allows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisReport {
+    pub geometric: bool,
+    pub full: bool,
+    pub symmetric: bool,
+    /// Largest `|f(face min) - f(face max)|` over the samples.
+    pub max_face_diff: f64,
+    /// Largest `|f(c + d) - f(c - d)|` over the samples.
+    pub max_symmetry_diff: f64,
+}
+
+impl AxisReport {
+    /// Sawtooth replication gives a connected shape (it may still have a
+    /// jump in value, so offsets and blends can crack).
+    pub fn sawtooth_connected(&self) -> bool {
+        self.geometric
+    }
+    /// Sawtooth replication gives a continuous field.
+    pub fn sawtooth_safe(&self) -> bool {
+        self.full
+    }
+    /// Triangle replication reproduces the cell pattern (always continuous,
+    /// but an asymmetric cell comes out mirrored in every second cell).
+    pub fn triangle_safe(&self) -> bool {
+        self.symmetric
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellReport {
+    pub axes: [AxisReport; 3],
+    /// The tolerance the value comparisons used.
+    pub tol: f64,
+    /// Samples per face edge.
+    pub n: usize,
+}
+
+impl CellReport {
+    pub fn geometric(&self) -> bool {
+        self.axes.iter().all(|a| a.geometric)
+    }
+    pub fn full(&self) -> bool {
+        self.axes.iter().all(|a| a.full)
+    }
+    pub fn symmetric(&self) -> bool {
+        self.axes.iter().all(|a| a.symmetric)
+    }
+}
+
+/// Samples `cell` on the box `[min, max]` with `n` (2..=128) samples per face
+/// edge and compares values with the absolute tolerance `tol`.
+pub fn cell_report(
+    cell: &Expr,
+    min: [f64; 3],
+    max: [f64; 3],
+    n: usize,
+    tol: f64,
+) -> Result<CellReport> {
+    check_box(min, max)?;
+    check_resolution("cell report face grid", n, 2, 128)?;
+    if !(tol >= 0.0 && tol.is_finite()) {
+        return Err(Error::OutOfRange {
+            what: "tolerance",
+            value: tol,
+            expected: "finite, >= 0",
+        });
+    }
+    let tape = Tape::new(cell);
+    let mut ev = PointEval::new(&tape);
+    let mut eval = |p: [f64; 3]| -> Result<f64> {
+        let v = ev.eval(p);
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(Error::NotFinite {
+                value: v,
+                x: p[0],
+                y: p[1],
+                z: p[2],
+            })
+        }
+    };
+    let at = |i: usize, k: usize| min[i] + (max[i] - min[i]) * k as f64 / (n - 1) as f64;
+    let mut axes = [AxisReport {
+        geometric: true,
+        full: true,
+        symmetric: true,
+        max_face_diff: 0.0,
+        max_symmetry_diff: 0.0,
+    }; 3];
+    for (axis, rep) in axes.iter_mut().enumerate() {
+        let (u, v) = microfrep_core::prims::others(axis);
+        for a in 0..n {
+            for b in 0..n {
+                let mut p = [0.0; 3];
+                p[u] = at(u, a);
+                p[v] = at(v, b);
+                p[axis] = min[axis];
+                let lo = eval(p)?;
+                p[axis] = max[axis];
+                let hi = eval(p)?;
+                rep.geometric &= (lo >= 0.0) == (hi >= 0.0);
+                rep.max_face_diff = rep.max_face_diff.max((lo - hi).abs());
+                // Mirror pairs through the whole box: c + d and c - d.
+                for c in 0..n / 2 {
+                    p[axis] = at(axis, c);
+                    let f1 = eval(p)?;
+                    p[axis] = at(axis, n - 1 - c);
+                    let f2 = eval(p)?;
+                    rep.max_symmetry_diff = rep.max_symmetry_diff.max((f1 - f2).abs());
+                }
+            }
+        }
+        rep.full = rep.max_face_diff <= tol;
+        rep.symmetric = rep.max_symmetry_diff <= tol;
+    }
+    Ok(CellReport { axes, tol, n })
+}
