@@ -1,0 +1,141 @@
+//! Syntax tree of a HyperFun file. Names are lower-cased (the language is
+//! case-insensitive); every node carries the 1-based position of its first
+//! token (of the operator for unary and binary operations), which is where
+//! the reference interpreter reports errors. The file name lives in
+//! [`crate::Diagnostics`].
+
+/// 1-based line and column; a tab counts as one column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, PartialOrd, Ord, Hash)]
+pub struct Pos {
+    pub line: u32,
+    pub col: u32,
+}
+
+/// Alias used by the diagnostics vocabulary.
+pub type Span = Pos;
+
+/// A whole file: its objects in textual order.
+#[derive(Debug, Clone)]
+pub struct Program {
+    pub objects: Vec<Object>,
+}
+
+/// `array name[size]` inside an object.
+#[derive(Debug, Clone)]
+pub struct ArrayDecl {
+    pub name: String,
+    pub size: usize,
+    pub pos: Pos,
+}
+
+/// `name(x[n], a[m], s[k]) { arrays; statements; name = result; }`.
+#[derive(Debug, Clone)]
+pub struct Object {
+    pub name: String,
+    pub x_size: usize,
+    pub a_size: usize,
+    /// 1 when the header omits `s`.
+    pub s_size: usize,
+    pub arrays: Vec<ArrayDecl>,
+    pub body: Vec<Stmt>,
+    /// The final `name = expr;`.
+    pub result: Expr,
+    pub pos: Pos,
+}
+
+#[derive(Debug, Clone)]
+pub enum Stmt {
+    /// `name = value;` (declares the scalar on first use).
+    Assign { name: String, value: Expr, pos: Pos },
+    /// `name[index] = value;` for a local array or `s`.
+    AssignIndex {
+        name: String,
+        index: Expr,
+        value: Expr,
+        pos: Pos,
+    },
+    /// `name = [lit, ...];` with exactly as many signed literals as elements.
+    AssignArray {
+        name: String,
+        values: Vec<f64>,
+        pos: Pos,
+    },
+    If {
+        cond: Cond,
+        then_body: Vec<Stmt>,
+        else_body: Vec<Stmt>,
+        pos: Pos,
+    },
+    While {
+        cond: Cond,
+        body: Vec<Stmt>,
+        pos: Pos,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CmpOp {
+    Lt,
+    Gt,
+    Le,
+    Ge,
+    /// `=`: equal within EPS.
+    Eq,
+    /// `/=`: differ by at least EPS.
+    Ne,
+}
+
+/// Condition of `if` / `while`; `and` and `or` share one precedence level.
+#[derive(Debug, Clone)]
+pub enum Cond {
+    Value(Expr),
+    Not(Box<Cond>),
+    Cmp(CmpOp, Box<Cond>, Box<Cond>),
+    And(Box<Cond>, Box<Cond>),
+    Or(Box<Cond>, Box<Cond>),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UnOp {
+    Plus,
+    Neg,
+    /// `~`: set complement (plain negation).
+    Complement,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+    /// `|`
+    Union,
+    /// `&`
+    Intersection,
+    /// `@` (same as `&` in the reference)
+    Product,
+    /// `\`
+    Subtraction,
+}
+
+#[derive(Debug, Clone)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub pos: Pos,
+}
+
+#[derive(Debug, Clone)]
+pub enum ExprKind {
+    Num(f64),
+    /// A scalar; as a call argument also a bare array name (`x`, `a`, `s` or
+    /// a local array) passed by reference.
+    Var(String),
+    /// `name[index]` for `x`, `a`, `s` or a local array.
+    Index(String, Box<Expr>),
+    Unary(UnOp, Box<Expr>),
+    Binary(BinOp, Box<Expr>, Box<Expr>),
+    /// A built-in, library function or earlier object.
+    Call(String, Vec<Expr>),
+}

@@ -1,0 +1,98 @@
+//! Diagnostics: `file:line:col: severity: message`, the source line and a caret.
+
+use crate::ast::Pos;
+use std::fmt;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Severity {
+    Error,
+    Warning,
+}
+
+/// One located message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diagnostic {
+    pub severity: Severity,
+    pub pos: Pos,
+    pub message: String,
+}
+
+/// All messages for one file. `file`, `message` and `pos` repeat the first
+/// error (the one the reference interpreter would report) for callers that
+/// need only that.
+#[derive(Clone, Debug, Default)]
+pub struct Diagnostics {
+    pub file: String,
+    pub message: String,
+    pub pos: Pos,
+    /// Errors and warnings in source order.
+    pub items: Vec<Diagnostic>,
+}
+
+impl Diagnostics {
+    pub(crate) fn new(file: &str, mut items: Vec<Diagnostic>) -> Self {
+        items.sort_by_key(|d| d.pos);
+        let first = items.iter().find(|d| d.severity == Severity::Error);
+        let (message, pos) = first.map_or_else(Default::default, |d| (d.message.clone(), d.pos));
+        Diagnostics {
+            file: file.to_string(),
+            message,
+            pos,
+            items,
+        }
+    }
+
+    pub fn errors(&self) -> impl Iterator<Item = &Diagnostic> {
+        self.items.iter().filter(|d| d.severity == Severity::Error)
+    }
+
+    pub fn has_errors(&self) -> bool {
+        self.errors().next().is_some()
+    }
+
+    /// Every message with its source line and a caret under the column.
+    pub fn render(&self, src: &str) -> String {
+        let mut out = String::new();
+        for d in &self.items {
+            let kind = match d.severity {
+                Severity::Error => "error",
+                Severity::Warning => "warning",
+            };
+            let (line, col) = (d.pos.line, d.pos.col);
+            // Lines split at LF only, as the scanner counts them; CR is shown as nothing.
+            let text = src
+                .split('\n')
+                .nth(line.saturating_sub(1) as usize)
+                .unwrap_or("");
+            let text = text.replace('\r', "");
+            let pad: String = text
+                .chars()
+                .take(col.saturating_sub(1) as usize)
+                .map(|c| if c == '\t' { '\t' } else { ' ' })
+                .collect();
+            out += &format!(
+                "{}:{line}:{col}: {kind}: {}\n  {text}\n  {pad}^\n",
+                self.file, d.message
+            );
+        }
+        out
+    }
+}
+
+impl fmt::Display for Diagnostics {
+    /// The first error as `file:line:col: message`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}:{}:{}: {}",
+            self.file, self.pos.line, self.pos.col, self.message
+        )?;
+        let more = self.errors().count().saturating_sub(1);
+        if more > 0 {
+            write!(f, " (and {more} more errors)")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for Diagnostics {}

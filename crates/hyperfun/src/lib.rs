@@ -1,0 +1,95 @@
+//! HyperFun: read, check and evaluate HyperFun models on the microfrep core.
+//!
+//! [`parse`] reads a file into an [`ast::Program`], reporting every error it
+//! can recover from ([`Diagnostics`]); [`lower`] turns a program into core
+//! expressions; [`printer::to_hyperfun`] writes a core expression back as
+//! HyperFun.
+
+pub mod ast;
+mod diag;
+mod lexer;
+pub mod library;
+pub mod lower;
+mod parser;
+pub mod printer;
+
+pub use diag::{Diagnostic, Diagnostics, Severity};
+pub use lower::Model;
+pub use parser::{hf_round, FunctionTable, ParamKind};
+
+/// Parsing choices.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Accept CR as whitespace (with one warning). The reference rejects it
+    /// ("Unknown lexem"), which breaks CRLF files.
+    pub accept_cr: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { accept_cr: true }
+    }
+}
+
+/// Parses a HyperFun file with the standard function table; CR is accepted.
+pub fn parse(src: &str, file: &str) -> Result<ast::Program, Diagnostics> {
+    parse_with(src, file, Options::default()).map(|(p, _)| p)
+}
+
+/// Parses with the standard function table; on success also returns the
+/// warnings.
+pub fn parse_with(
+    src: &str,
+    file: &str,
+    options: Options,
+) -> Result<(ast::Program, Diagnostics), Diagnostics> {
+    let registry = library::Registry::standard();
+    let table = |name: &str| standard_signature(&registry, name);
+    parse_with_table(src, file, options, &table)
+}
+
+/// Parameters of a built-in (SPEC section 7) or library function.
+fn standard_signature(registry: &library::Registry, name: &str) -> Option<Vec<ParamKind>> {
+    if let Some(&(_, n)) = lower::ops::BUILTINS.iter().find(|(b, _)| *b == name) {
+        return Some(vec![ParamKind::Real; n]);
+    }
+    let f = registry.get(name)?;
+    let kind = |k: &library::Kind| match k {
+        library::Kind::A => ParamKind::Array,
+        library::Kind::R => ParamKind::Real,
+    };
+    Some(f.kinds.iter().map(kind).collect())
+}
+
+/// Parses with a caller-supplied function table (which names are functions
+/// and their parameter kinds).
+pub fn parse_with_table(
+    src: &str,
+    file: &str,
+    options: Options,
+    functions: FunctionTable,
+) -> Result<(ast::Program, Diagnostics), Diagnostics> {
+    let mut diags = Vec::new();
+    let toks = lexer::lex(src, options.accept_cr, &mut diags);
+    let mut p = parser::Parser::new(toks, functions, diags);
+    let program = p.program();
+    let diags = Diagnostics::new(file, p.diags);
+    if diags.has_errors() {
+        Err(diags)
+    } else {
+        Ok((program, diags))
+    }
+}
+
+/// Parses and lowers object `object` (default `my_model`, else the first).
+pub fn load(src: &str, file: &str, object: Option<&str>) -> Result<Model, Diagnostics> {
+    let program = std::sync::Arc::new(parse(src, file)?);
+    lower::load_program(program, object, &[]).map_err(|e| {
+        let d = Diagnostic {
+            severity: Severity::Error,
+            pos: e.pos,
+            message: e.message,
+        };
+        Diagnostics::new(file, vec![d])
+    })
+}

@@ -1,0 +1,178 @@
+//! The HyperFun library registry: every callable `hf*` function by name, with
+//! its argument kinds and a builder that produces core expressions.
+//!
+//! Builders work on symbolic values, so the same code serves the lowered
+//! graph and (with constant arguments, which fold) the per-point fallback.
+//! Adding a function is one `register` call; the parser asks the registry
+//! which names are functions and what they take.
+
+mod attrs;
+mod blends;
+mod conv;
+mod conv_arc;
+mod prims;
+mod sardef;
+mod transforms;
+
+use microfrep_core::Expr;
+use std::collections::HashMap;
+
+/// `EPS` of the reference interpreter.
+pub const EPS: f64 = 1e-6;
+/// Value most primitives return for a point array whose length is not 3.
+pub const SENTINEL: f64 = -1111111111111.0;
+
+/// Kind of one parameter: an array name passed by reference or a real value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    A,
+    R,
+}
+
+/// One evaluated argument.
+#[derive(Clone, Debug)]
+pub enum Arg {
+    Real(Expr),
+    Array(Vec<Expr>),
+}
+
+impl Arg {
+    /// The real value (an array argument reads as NaN; the registry's kinds
+    /// make that unreachable for well-formed calls).
+    pub fn real(&self) -> Expr {
+        match self {
+            Arg::Real(e) => e.clone(),
+            Arg::Array(_) => Expr::constant(f64::NAN),
+        }
+    }
+    pub fn array(&self) -> &[Expr] {
+        match self {
+            Arg::Array(v) => v,
+            Arg::Real(_) => &[],
+        }
+    }
+}
+
+/// Element `i` (0-based) of an array argument. The C code reads past short
+/// arrays; here such a read is NaN, never a panic.
+pub fn el(a: &[Expr], i: usize) -> Expr {
+    a.get(i).cloned().unwrap_or(Expr::constant(f64::NAN))
+}
+
+/// What a call produces: its value and the arrays it overwrote
+/// (argument position, new contents).
+pub struct Output {
+    pub value: Expr,
+    pub writes: Vec<(usize, Vec<Expr>)>,
+    /// The builder needed a constant where it got a point-dependent value
+    /// (e.g. a term count); the model must take the per-point fallback.
+    pub needs_constants: bool,
+}
+
+impl Output {
+    pub fn value(value: Expr) -> Output {
+        Output {
+            value,
+            writes: Vec::new(),
+            needs_constants: false,
+        }
+    }
+    pub fn writes(value: Expr, writes: Vec<(usize, Vec<Expr>)>) -> Output {
+        Output {
+            value,
+            writes,
+            needs_constants: false,
+        }
+    }
+    pub fn needs_constants() -> Output {
+        Output {
+            value: Expr::constant(f64::NAN),
+            writes: Vec::new(),
+            needs_constants: true,
+        }
+    }
+}
+
+/// Builds the call from arguments already checked against `kinds`.
+pub type Builder = fn(&[Arg]) -> Output;
+
+/// One library function.
+#[derive(Clone, Debug)]
+pub struct LibFn {
+    /// Lower-case name.
+    pub name: &'static str,
+    pub kinds: &'static [Kind],
+    pub build: Builder,
+}
+
+/// Name (lower case) to library function.
+#[derive(Clone, Debug)]
+pub struct Registry {
+    map: HashMap<&'static str, LibFn>,
+}
+
+impl Registry {
+    /// An empty registry.
+    pub fn empty() -> Registry {
+        Registry {
+            map: HashMap::new(),
+        }
+    }
+
+    /// The library of the reference interpreter.
+    pub fn standard() -> Registry {
+        let mut r = Registry::empty();
+        prims::register(&mut r);
+        transforms::register(&mut r);
+        blends::register(&mut r);
+        sardef::register(&mut r);
+        conv::register(&mut r);
+        conv_arc::register(&mut r);
+        attrs::register(&mut r);
+        r
+    }
+
+    /// Adds (or replaces) a function. `name` must be lower case.
+    pub fn register(&mut self, name: &'static str, kinds: &'static [Kind], build: Builder) {
+        self.map.insert(name, LibFn { name, kinds, build });
+    }
+
+    /// Looks a name up, case-insensitively.
+    pub fn get(&self, name: &str) -> Option<&LibFn> {
+        self.map.get(name.to_ascii_lowercase().as_str())
+    }
+
+    /// All names, sorted.
+    pub fn names(&self) -> Vec<&'static str> {
+        let mut v: Vec<_> = self.map.keys().copied().collect();
+        v.sort_unstable();
+        v
+    }
+}
+
+/// `R0&(u, v) = u + v - sqrt(u^2 + v^2)`.
+pub fn r0_and(u: &Expr, v: &Expr) -> Expr {
+    u + v - (u.square() + v.square()).sqrt()
+}
+
+/// `R0|(u, v) = u + v + sqrt(u^2 + v^2)`.
+pub fn r0_or(u: &Expr, v: &Expr) -> Expr {
+    u + v + (u.square() + v.square()).sqrt()
+}
+
+/// `v` unless the point array has the wrong length (then the sentinel).
+pub fn point3(args: &[Arg], f: impl FnOnce(&[Expr]) -> Expr) -> Expr {
+    let p = args[0].array();
+    if p.len() != 3 {
+        return Expr::constant(SENTINEL);
+    }
+    f(p)
+}
+
+/// `1` when `|v| < EPS`, else `0`.
+pub fn tiny(v: &Expr) -> Expr {
+    v.abs().lt(EPS)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,479 @@
+//! Symbolic execution of one object: statements run in order on symbolic
+//! values (SSA style), so the result is a core expression for the value and
+//! one for the error code. With constant coordinates everything folds and
+//! the same code is the per-point fallback interpreter.
+
+use super::errors::{ErrorTable, RuntimeError};
+use super::ops::{self, Fault};
+use crate::ast::{self, BinOp, CmpOp, Cond, ExprKind, Object, Pos, Program, Stmt, UnOp};
+use crate::library::{Arg, Kind, Registry, EPS};
+use microfrep_core::Expr;
+use std::collections::HashMap;
+
+/// Loop iterations allowed in one evaluation (the reference would hang).
+pub const LOOP_BUDGET: u64 = 1_000_000;
+
+/// Why a model cannot become one expression graph.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Stop {
+    /// Control flow depends on the point: use the per-point fallback.
+    NeedsPoint,
+    /// A static error (bad call between objects, ...), reported at load.
+    Static(String, Pos),
+}
+
+fn c(v: f64) -> Expr {
+    Expr::constant(v)
+}
+
+fn is_true(e: &Expr) -> bool {
+    e.as_const().is_some_and(|v| v != 0.0)
+}
+
+/// A variable cell: its value and whether it holds one (truth value).
+#[derive(Clone)]
+struct Slot {
+    v: Expr,
+    init: Expr,
+}
+
+impl Slot {
+    fn set(v: Expr) -> Slot {
+        Slot { v, init: c(1.0) }
+    }
+    fn unset() -> Slot {
+        Slot {
+            v: c(f64::NAN),
+            init: c(0.0),
+        }
+    }
+}
+
+/// Variables of one activation. Arrays include `x`, `a` and `s`.
+#[derive(Clone, Default)]
+struct Env {
+    scalars: HashMap<String, Slot>,
+    arrays: HashMap<String, Vec<Slot>>,
+}
+
+/// `select` over slots: `cond` picks `a`, else `b`.
+fn merge(cond: &Expr, a: &Slot, b: &Slot) -> Slot {
+    Slot {
+        v: Expr::select(cond.clone(), a.v.clone(), b.v.clone()),
+        init: Expr::select(cond.clone(), a.init.clone(), b.init.clone()),
+    }
+}
+
+/// Inputs of one run: coordinates and parameters as expressions.
+pub struct Inputs {
+    pub x: Vec<Expr>,
+    pub a: Vec<Expr>,
+}
+
+pub struct Exec<'p> {
+    program: &'p Program,
+    registry: &'p Registry,
+    table: &'p ErrorTable,
+    /// Error code so far (0 = none).
+    pub err: Expr,
+    /// Truth value of "this statement runs" (inside point-dependent `if`s).
+    guard: Expr,
+    budget: u64,
+}
+
+impl<'p> Exec<'p> {
+    pub fn new(program: &'p Program, registry: &'p Registry, table: &'p ErrorTable) -> Self {
+        Exec {
+            program,
+            registry,
+            table,
+            err: c(0.0),
+            guard: c(1.0),
+            budget: LOOP_BUDGET,
+        }
+    }
+
+    /// True once an error is certain: nothing after it matters.
+    fn dead(&self) -> bool {
+        is_true(&self.err)
+    }
+
+    fn fault(&mut self, cond: Expr, message: &str, pos: Pos) {
+        let hit = self.guard.and(&cond);
+        if hit.as_const() == Some(0.0) || self.dead() {
+            return;
+        }
+        let code = self.table.code(RuntimeError {
+            message: message.to_string(),
+            line: pos.line,
+            col: pos.col,
+        });
+        let new = Expr::select(hit, c(code), c(0.0));
+        self.err = Expr::select(self.err.clone(), self.err.clone(), new);
+    }
+
+    fn faults(&mut self, fs: Vec<Fault>, pos: Pos) {
+        for (cond, msg) in fs {
+            self.fault(cond, msg, pos);
+        }
+    }
+
+    /// Runs object `obj` with the given inputs; returns its value.
+    pub fn run(&mut self, obj: &'p Object, inputs: Inputs) -> Result<Expr, Stop> {
+        let mut env = Env::default();
+        env.arrays.insert("x".into(), fit(inputs.x, obj.x_size));
+        env.arrays.insert("a".into(), fit(inputs.a, obj.a_size));
+        env.arrays
+            .insert("s".into(), vec![Slot::set(c(0.0)); obj.s_size.max(1)]);
+        self.call_body(obj, &mut env)
+    }
+
+    fn call_body(&mut self, obj: &'p Object, env: &mut Env) -> Result<Expr, Stop> {
+        for d in &obj.arrays {
+            env.arrays
+                .insert(d.name.clone(), vec![Slot::unset(); d.size.max(1)]);
+        }
+        self.block(&obj.body, env)?;
+        if self.dead() {
+            return Ok(c(f64::NAN));
+        }
+        self.expr(&obj.result, env)
+    }
+
+    fn block(&mut self, stmts: &[Stmt], env: &mut Env) -> Result<(), Stop> {
+        for s in stmts {
+            if self.dead() {
+                return Ok(());
+            }
+            self.stmt(s, env)?;
+        }
+        Ok(())
+    }
+
+    fn stmt(&mut self, s: &Stmt, env: &mut Env) -> Result<(), Stop> {
+        match s {
+            Stmt::Assign { name, value, .. } => {
+                let v = self.expr(value, env)?;
+                env.scalars.insert(name.clone(), Slot::set(v));
+            }
+            Stmt::AssignIndex {
+                name, index, value, ..
+            } => {
+                // Right to left: the value first, then the index.
+                let v = self.expr(value, env)?;
+                let i = self.expr(index, env)?;
+                let i = ops::hf_round(&i);
+                let n = env.arrays.get(name).map_or(0, Vec::len);
+                self.fault(i.lt(1.0).or(i.gt(n as f64)), ops::INDEX_RANGE, index.pos);
+                let arr = env.arrays.entry(name.clone()).or_default();
+                match i.as_const() {
+                    Some(k) => {
+                        if k >= 1.0 && k <= n as f64 {
+                            arr[k as usize - 1] = Slot::set(v);
+                        }
+                    }
+                    None => {
+                        for (k, slot) in arr.iter_mut().enumerate() {
+                            *slot = merge(&i.eq_((k + 1) as f64), &Slot::set(v.clone()), slot);
+                        }
+                    }
+                }
+            }
+            Stmt::AssignArray { name, values, .. } => {
+                let arr = values.iter().map(|&v| Slot::set(c(v))).collect();
+                env.arrays.insert(name.clone(), arr);
+            }
+            Stmt::If {
+                cond,
+                then_body,
+                else_body,
+                ..
+            } => {
+                let t = self.cond(cond, env)?;
+                match t.as_const() {
+                    Some(v) if v != 0.0 => self.block(then_body, env)?,
+                    Some(_) => self.block(else_body, env)?,
+                    None => self.branch(&t, then_body, else_body, env)?,
+                }
+            }
+            Stmt::While { cond, body, pos } => loop {
+                let t = self.cond(cond, env)?;
+                match t.as_const() {
+                    None => return Err(Stop::NeedsPoint),
+                    Some(0.0) => break,
+                    Some(_) => {}
+                }
+                if self.budget == 0 {
+                    self.fault(c(1.0), ops::LOOP_LIMIT, *pos);
+                    break;
+                }
+                self.budget -= 1;
+                self.block(body, env)?;
+                if self.dead() {
+                    break;
+                }
+            },
+        }
+        Ok(())
+    }
+
+    /// Both branches of a point-dependent `if`, merged with `select`.
+    fn branch(&mut self, t: &Expr, yes: &[Stmt], no: &[Stmt], env: &mut Env) -> Result<(), Stop> {
+        let outer = self.guard.clone();
+        let mut env_yes = env.clone();
+        self.guard = outer.and(t);
+        self.block(yes, &mut env_yes)?;
+        self.guard = outer.and(t.not());
+        self.block(no, env)?;
+        self.guard = outer;
+        let env_no = std::mem::take(env);
+        let names: std::collections::BTreeSet<&String> = env_yes
+            .scalars
+            .keys()
+            .chain(env_no.scalars.keys())
+            .collect();
+        for n in names {
+            let a = env_yes.scalars.get(n).cloned().unwrap_or_else(Slot::unset);
+            let b = env_no.scalars.get(n).cloned().unwrap_or_else(Slot::unset);
+            env.scalars.insert(n.clone(), merge(t, &a, &b));
+        }
+        for (n, b) in &env_no.arrays {
+            let m = match env_yes.arrays.get(n) {
+                Some(a) if a.len() == b.len() => {
+                    a.iter().zip(b).map(|(a, b)| merge(t, a, b)).collect()
+                }
+                _ => b.clone(),
+            };
+            env.arrays.insert(n.clone(), m);
+        }
+        Ok(())
+    }
+
+    fn cond(&mut self, cond: &Cond, env: &mut Env) -> Result<Expr, Stop> {
+        Ok(match cond {
+            Cond::Value(e) => ops::truth(&self.expr(e, env)?),
+            Cond::Not(a) => self.cond(a, env)?.not(),
+            Cond::Cmp(op, a, b) => {
+                let b = self.cond_value(b, env)?;
+                let a = self.cond_value(a, env)?;
+                match op {
+                    CmpOp::Lt => a.lt(b),
+                    CmpOp::Gt => a.gt(b),
+                    CmpOp::Le => a.le(b),
+                    CmpOp::Ge => a.ge(b),
+                    CmpOp::Eq => (a - b).abs().lt(EPS),
+                    CmpOp::Ne => (a - b).abs().ge(EPS),
+                }
+            }
+            Cond::And(a, b) => {
+                let b = self.cond(b, env)?;
+                let a = self.cond(a, env)?;
+                a.and(b)
+            }
+            Cond::Or(a, b) => {
+                let b = self.cond(b, env)?;
+                let a = self.cond(a, env)?;
+                a.or(b)
+            }
+        })
+    }
+
+    /// A comparison operand: a plain value, or the 0/1 value of a condition.
+    fn cond_value(&mut self, cond: &Cond, env: &mut Env) -> Result<Expr, Stop> {
+        match cond {
+            Cond::Value(e) => self.expr(e, env),
+            other => self.cond(other, env),
+        }
+    }
+
+    fn read_array(&mut self, name: &str, index: &Expr, pos: Pos, ipos: Pos, env: &mut Env) -> Expr {
+        let Some(arr) = env.arrays.get(name) else {
+            self.fault(c(1.0), ops::UNASSIGNED, pos);
+            return c(f64::NAN);
+        };
+        let i = ops::hf_round(index);
+        let n = arr.len() as f64;
+        self.fault(i.lt(1.0).or(i.gt(n)), ops::INDEX_RANGE, ipos);
+        let slot = match i.as_const() {
+            Some(k) if k >= 1.0 && k <= n => arr[k as usize - 1].clone(),
+            Some(_) => return c(f64::NAN),
+            None => arr
+                .iter()
+                .enumerate()
+                .rev()
+                .fold(Slot::unset(), |acc, (k, s)| {
+                    merge(&i.eq_((k + 1) as f64), s, &acc)
+                }),
+        };
+        self.fault(slot.init.not(), ops::UNASSIGNED, pos);
+        slot.v
+    }
+
+    fn expr(&mut self, e: &ast::Expr, env: &mut Env) -> Result<Expr, Stop> {
+        let pos = e.pos;
+        Ok(match &e.kind {
+            ExprKind::Num(v) => c(*v),
+            ExprKind::Var(name) => match env.scalars.get(name) {
+                Some(s) => {
+                    self.fault(s.init.not(), ops::NOT_INIT, pos);
+                    s.v.clone()
+                }
+                None => {
+                    self.fault(c(1.0), ops::NOT_INIT, pos);
+                    c(f64::NAN)
+                }
+            },
+            ExprKind::Index(name, index) => {
+                let i = self.expr(index, env)?;
+                self.read_array(name, &i, pos, index.pos, env)
+            }
+            ExprKind::Unary(op, a) => {
+                let a = self.expr(a, env)?;
+                match op {
+                    UnOp::Plus => a,
+                    UnOp::Neg | UnOp::Complement => -a,
+                }
+            }
+            ExprKind::Binary(op, a, b) => {
+                let b = self.expr(b, env)?;
+                let a = self.expr(a, env)?;
+                match op {
+                    BinOp::Add => a + b,
+                    BinOp::Sub => a - b,
+                    BinOp::Mul => a * b,
+                    BinOp::Div => {
+                        let (v, f) = ops::div(&a, &b);
+                        self.faults(f, pos);
+                        v
+                    }
+                    BinOp::Pow => {
+                        let (v, f) = ops::pow(&a, &b);
+                        self.faults(f, pos);
+                        v
+                    }
+                    BinOp::Union => ops::union(&a, &b),
+                    BinOp::Intersection | BinOp::Product => ops::intersection(&a, &b),
+                    BinOp::Subtraction => ops::subtraction(&a, &b),
+                }
+            }
+            ExprKind::Call(name, args) => return self.call(name, args, pos, env),
+        })
+    }
+
+    fn call(
+        &mut self,
+        name: &str,
+        args: &[ast::Expr],
+        pos: Pos,
+        env: &mut Env,
+    ) -> Result<Expr, Stop> {
+        if let Some(obj) = self.program.objects.iter().find(|o| o.name == name) {
+            return self.call_object(obj, args, pos, env);
+        }
+        if let Some(f) = self.registry.get(name) {
+            let f = f.clone();
+            if args.len() != f.kinds.len() {
+                let msg = format!("{name} takes {} arguments", f.kinds.len());
+                return Err(Stop::Static(msg, pos));
+            }
+            // Last argument first, as the reference evaluates them.
+            let mut vals = vec![Arg::Real(c(0.0)); args.len()];
+            for (k, a) in args.iter().enumerate().rev() {
+                vals[k] = match (f.kinds.get(k), &a.kind) {
+                    (Some(Kind::A), ExprKind::Var(n)) => Arg::Array(self.array_arg(n, a.pos, env)),
+                    _ => Arg::Real(self.expr(a, env)?),
+                };
+            }
+            let out = (f.build)(&vals);
+            if out.needs_constants {
+                return Err(Stop::NeedsPoint);
+            }
+            for (k, v) in out.writes {
+                if let ExprKind::Var(n) = &args[k].kind {
+                    if let Some(arr) = env.arrays.get_mut(n) {
+                        *arr = v.into_iter().map(Slot::set).collect();
+                    }
+                }
+            }
+            return Ok(out.value);
+        }
+        let mut vals = vec![c(0.0); args.len()];
+        for (k, a) in args.iter().enumerate().rev() {
+            vals[k] = self.expr(a, env)?;
+        }
+        match ops::builtin(name, &vals) {
+            Some((v, f)) => {
+                self.faults(f, pos);
+                Ok(v)
+            }
+            None => Err(Stop::Static(format!("unknown function '{name}'"), pos)),
+        }
+    }
+
+    /// An array passed by reference: its current values; every element must
+    /// hold one.
+    fn array_arg(&mut self, name: &str, pos: Pos, env: &mut Env) -> Vec<Expr> {
+        let Some(arr) = env.arrays.get(name) else {
+            self.fault(c(1.0), ops::UNASSIGNED, pos);
+            return Vec::new();
+        };
+        let all = arr.iter().fold(c(1.0), |acc, s| acc.and(&s.init));
+        let vals = arr.iter().map(|s| s.v.clone()).collect();
+        self.fault(all.not(), ops::ARRAY_UNASSIGNED, pos);
+        vals
+    }
+
+    /// A call of an earlier object: it runs on copies of `x` and `a`; its `s`
+    /// is copied back into the caller's third argument.
+    fn call_object(
+        &mut self,
+        obj: &'p Object,
+        args: &[ast::Expr],
+        pos: Pos,
+        env: &mut Env,
+    ) -> Result<Expr, Stop> {
+        let sizes = [obj.x_size, obj.a_size, obj.s_size.max(1)];
+        if !(2..=3).contains(&args.len()) {
+            return Err(Stop::Static("Wrong number of items in array".into(), pos));
+        }
+        let mut names = Vec::new();
+        for (k, a) in args.iter().enumerate() {
+            let ExprKind::Var(n) = &a.kind else {
+                return Err(Stop::Static("array name expected".into(), a.pos));
+            };
+            let len = env.arrays.get(n).map_or(0, Vec::len);
+            if len != sizes[k.min(2)] {
+                return Err(Stop::Static("Wrong number of items in array".into(), a.pos));
+            }
+            names.push(n.clone());
+        }
+        if names.len() == 2 && sizes[2] != 1 {
+            return Err(Stop::Static("Wrong number of items in array".into(), pos));
+        }
+        let mut callee = Env::default();
+        let roles = ["x", "a", "s"];
+        for (k, n) in names.iter().enumerate().rev() {
+            let vals = self.array_arg(n, args[k].pos, env);
+            callee
+                .arrays
+                .insert(roles[k].into(), vals.into_iter().map(Slot::set).collect());
+        }
+        callee
+            .arrays
+            .entry("s".into())
+            .or_insert_with(|| vec![Slot::set(c(0.0))]);
+        let v = self.call_body(obj, &mut callee)?;
+        if let Some(sname) = names.get(2) {
+            env.arrays
+                .insert(sname.clone(), callee.arrays.remove("s").unwrap_or_default());
+        }
+        Ok(v)
+    }
+}
+
+/// Coordinates or parameters padded (or cut) to the declared size.
+fn fit(v: Vec<Expr>, n: usize) -> Vec<Slot> {
+    let mut s: Vec<Slot> = v.into_iter().take(n).map(Slot::set).collect();
+    s.resize(n.max(1), Slot::set(c(0.0)));
+    s
+}

@@ -1,0 +1,91 @@
+//! Per-point evaluation for models whose control flow depends on the point
+//! (a `while` whose trip count varies, ...). It runs the same symbolic
+//! executor with constant coordinates, so everything folds to numbers and
+//! the semantics are those of the lowered path. Wrapped as a core `Field`,
+//! it plugs into every evaluation mode; its intervals are the whole line.
+
+use super::errors::ErrorTable;
+use super::exec::{Exec, Inputs, Stop};
+use crate::ast::Program;
+use crate::library::Registry;
+use microfrep_core::{Expr, Field, Interval};
+use std::sync::Arc;
+
+/// Everything needed to evaluate one object at a point.
+#[derive(Debug)]
+pub struct Interp {
+    pub program: Arc<Program>,
+    pub object: usize,
+    pub registry: Registry,
+    pub table: ErrorTable,
+    pub params: Vec<f64>,
+}
+
+impl Interp {
+    /// Value and error code at a point.
+    pub fn eval(&self, p: [f64; 3]) -> (f64, f64) {
+        let obj = &self.program.objects[self.object];
+        let mut ex = Exec::new(&self.program, &self.registry, &self.table);
+        let inputs = Inputs {
+            x: p.iter().map(|&v| Expr::constant(v)).collect(),
+            a: self.params.iter().map(|&v| Expr::constant(v)).collect(),
+        };
+        match ex.run(obj, inputs) {
+            Ok(v) => {
+                let code = ex.err.as_const().unwrap_or(f64::NAN);
+                (v.as_const().unwrap_or(f64::NAN), code)
+            }
+            // With constant inputs every condition is constant, and static
+            // errors were found when the model was loaded.
+            Err(Stop::NeedsPoint) | Err(Stop::Static(..)) => (f64::NAN, f64::NAN),
+        }
+    }
+}
+
+/// Which output of the interpreter a field exposes.
+#[derive(Debug)]
+pub struct Output {
+    pub interp: Arc<Interp>,
+    pub error: bool,
+}
+
+impl Output {
+    fn pick(&self, p: [f64; 3]) -> f64 {
+        let (v, e) = self.interp.eval(p);
+        if self.error {
+            e
+        } else {
+            v
+        }
+    }
+}
+
+/// Step of the central differences that give the fallback's gradient.
+const H: f64 = 1e-6;
+
+impl Field for Output {
+    fn name(&self) -> &str {
+        if self.error {
+            "hyperfun-error"
+        } else {
+            "hyperfun"
+        }
+    }
+    fn eval(&self, p: [f64; 3]) -> f64 {
+        self.pick(p)
+    }
+    fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let v = self.pick(p);
+        let mut g = [0.0; 3];
+        for (k, gk) in g.iter_mut().enumerate() {
+            let (mut lo, mut hi) = (p, p);
+            lo[k] -= H;
+            hi[k] += H;
+            *gk = (self.pick(hi) - self.pick(lo)) / (2.0 * H);
+        }
+        (v, g)
+    }
+    fn interval(&self, _b: [Interval; 3]) -> Interval {
+        Interval::ENTIRE
+    }
+}
