@@ -1,0 +1,228 @@
+//! Meshing one surface brick: dense f32 sampling of its nodes, marching
+//! tetrahedra over its cells, refinement of the vertices it owns.
+
+use crate::classify::{proven_sign, unproven_cells, BrickClass};
+use crate::grid::Grid;
+use crate::refine::{refine_edges, Edge};
+use crate::tets::cell_table;
+use microfrep_core::{BatchEval, IntervalEval, Tape, BLOCK};
+
+/// The part of the mesh made by one brick. Vertices on grid edges that start
+/// in this brick's half-open node range are owned here; the others are
+/// referenced by key and resolved against their owner when stitching.
+#[derive(Default)]
+pub struct BrickMesh {
+    pub owned_pos: Vec<[f32; 3]>,
+    /// (global edge key, index into `owned_pos`) of the owned vertices on
+    /// the brick's lower faces (the only ones other bricks use), by key.
+    pub owned_keys: Vec<(u64, u32)>,
+    pub foreign_keys: Vec<u64>,
+    /// Indices below `owned_pos.len()` are owned vertices, the rest
+    /// `foreign_keys[i - owned]`.
+    pub tris: Vec<[u32; 3]>,
+    /// See [`unproven_cells`]; counted only in bricks with no surface.
+    pub thin_cells: usize,
+}
+
+/// Per-thread buffers, reused from brick to brick.
+pub struct Scratch<'t> {
+    batch: BatchEval<'t>,
+    interval: IntervalEval<'t>,
+    vals: Vec<f32>,
+    inside: Vec<u8>,
+    /// Local edge (node * 8 + dir) -> local vertex, u32::MAX when unset.
+    vmap: Vec<u32>,
+    verts: Vec<u32>,
+    remap: Vec<u32>,
+    edges: Vec<Edge>,
+    tris: Vec<[u32; 3]>,
+}
+
+impl<'t> Scratch<'t> {
+    pub fn new(tape: &'t Tape, brick: usize) -> Self {
+        let nodes = (brick + 1).pow(3);
+        Scratch {
+            batch: BatchEval::new(tape),
+            interval: IntervalEval::new(tape),
+            edges: Vec::new(),
+            tris: Vec::new(),
+            vals: vec![0.0; nodes],
+            inside: vec![0; nodes],
+            vmap: vec![u32::MAX; nodes * 8],
+            verts: Vec::new(),
+            remap: Vec::new(),
+        }
+    }
+}
+
+/// Meshes brick `b`; `classes` gives the proven signs of shared nodes.
+pub fn mesh_brick(
+    grid: &Grid,
+    classes: &[BrickClass],
+    b: [usize; 3],
+    s: &mut Scratch,
+) -> BrickMesh {
+    let (lo, n) = grid.brick_nodes(b);
+    sample(grid, lo, n, s);
+    fix_signs(grid, classes, lo, n, s);
+    let total = n[0] * n[1] * n[2];
+    let first = s.inside[0];
+    if s.inside[..total].iter().all(|&v| v == first) {
+        let thin_cells = unproven_cells(&mut s.interval, grid, lo, n, first == 1);
+        return BrickMesh {
+            thin_cells,
+            ..BrickMesh::default()
+        };
+    }
+
+    // Marching tetrahedra over the cells; vertices deduplicated per local edge.
+    let table = cell_table();
+    let (sx, sy) = (1, n[0]);
+    let sz = n[0] * n[1];
+    let corner_off: [usize; 8] =
+        std::array::from_fn(|c| (c & 1) * sx + ((c >> 1) & 1) * sy + ((c >> 2) & 1) * sz);
+    s.tris.clear();
+    s.verts.clear();
+    for k in 0..n[2] - 1 {
+        for j in 0..n[1] - 1 {
+            let row = j * sy + k * sz;
+            for i in 0..n[0] - 1 {
+                let base = row + i;
+                let mut mask = 0usize;
+                for (c, off) in corner_off.iter().enumerate() {
+                    mask |= (s.inside[base + off] as usize) << c;
+                }
+                if mask == 0 || mask == 255 {
+                    continue;
+                }
+                let r = table.start[mask] as usize..table.start[mask + 1] as usize;
+                for tri in &table.tris[r] {
+                    s.tris.push(tri.map(|e| {
+                        let node = base + corner_off[(e >> 3) as usize];
+                        let key = node * 8 + (e & 7) as usize;
+                        let v = &mut s.vmap[key];
+                        if *v == u32::MAX {
+                            *v = s.verts.len() as u32;
+                            s.verts.push(key as u32);
+                        }
+                        *v
+                    }));
+                }
+            }
+        }
+    }
+    // Owned vertices first (in creation order), then foreign ones. A vertex
+    // is owned when its edge starts below the brick's upper faces (or on
+    // the grid's last brick along that axis).
+    let last: [bool; 3] = std::array::from_fn(|a| b[a] + 1 == grid.bricks[a]);
+    let mut out = BrickMesh::default();
+    s.remap.clear();
+    s.remap.resize(s.verts.len(), u32::MAX);
+    s.edges.clear();
+    let mut owned = 0u32;
+    for (vi, &key) in s.verts.iter().enumerate() {
+        let (l, dir) = (key as usize / 8, key as usize % 8);
+        let ln = [l % n[0], (l / n[0]) % n[1], l / sz];
+        let g: [usize; 3] = std::array::from_fn(|a| lo[a] + ln[a]);
+        let gkey = grid.node_index(g) * 8 + dir as u64;
+        if (0..3).all(|a| ln[a] + 1 < n[a] || last[a]) {
+            s.remap[vi] = owned;
+            // Only vertices on the lower faces can be wanted by other bricks.
+            if ln.contains(&0) {
+                out.owned_keys.push((gkey, owned));
+            }
+            owned += 1;
+            let e = l + (dir & 1) * sx + ((dir >> 1) & 1) * sy + ((dir >> 2) & 1) * sz;
+            let end: [usize; 3] = std::array::from_fn(|a| g[a] + (dir >> a & 1));
+            let (pa, pb) = (grid.node_pos(g), grid.node_pos(end));
+            s.edges.push(if s.inside[l] == 1 {
+                Edge::new(pa, pb, s.vals[l], s.vals[e])
+            } else {
+                Edge::new(pb, pa, s.vals[e], s.vals[l])
+            });
+        } else {
+            out.foreign_keys.push(gkey);
+        }
+    }
+    refine_edges(&mut s.batch, &s.edges, &mut out.owned_pos);
+    // Foreign vertices follow the owned ones, in the order of `foreign_keys`.
+    let unset = s.remap.iter_mut().filter(|r| **r == u32::MAX);
+    for (next, r) in (owned..).zip(unset) {
+        *r = next;
+    }
+    out.owned_keys.sort_unstable();
+    out.tris = s
+        .tris
+        .iter()
+        .map(|t| t.map(|v| s.remap[v as usize]))
+        .collect();
+    for &key in &s.verts {
+        s.vmap[key as usize] = u32::MAX;
+    }
+    out
+}
+
+/// Samples the brick's nodes in f32 batches; inside is `f >= 0` (NaN is
+/// outside). Coordinates come from global node indices, so a node shared by
+/// two bricks gets the same value in both.
+fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
+    let axis = |a: usize| -> Vec<f32> {
+        (0..n[a])
+            .map(|i| (grid.origin[a] + grid.h * (lo[a] + i) as f64) as f32)
+            .collect()
+    };
+    let (xs, ys, zs) = (axis(0), axis(1), axis(2));
+    let total = n[0] * n[1] * n[2];
+    let (mut i, mut j, mut k) = (0, 0, 0);
+    let mut start = 0;
+    while start < total {
+        let len = BLOCK.min(total - start);
+        let (bx, by, bz) = s.batch.coords_mut();
+        for q in 0..len {
+            bx[q] = xs[i];
+            by[q] = ys[j];
+            bz[q] = zs[k];
+            i += 1;
+            if i == n[0] {
+                i = 0;
+                j += 1;
+                if j == n[1] {
+                    j = 0;
+                    k += 1;
+                }
+            }
+        }
+        let v = s.batch.eval_loaded(len);
+        s.vals[start..start + len].copy_from_slice(v);
+        for (d, &f) in s.inside[start..start + len].iter_mut().zip(v) {
+            *d = (f >= 0.0) as u8;
+        }
+        start += len;
+    }
+}
+
+/// Makes the signs of nodes on the brick's faces agree with every brick
+/// that shares them: the outer padding layer is outside, and nodes in a
+/// brick proven empty or full take that sign.
+fn fix_signs(grid: &Grid, classes: &[BrickClass], lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
+    let mut fix = |i: usize, j: usize, k: usize| {
+        let g = [lo[0] + i, lo[1] + j, lo[2] + k];
+        let l = i + n[0] * (j + n[1] * k);
+        if grid.on_border(g) {
+            s.inside[l] = 0;
+        } else if let Some(v) = proven_sign(grid, classes, g) {
+            s.inside[l] = v as u8;
+        }
+    };
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            let face = k == 0 || k == n[2] - 1 || j == 0 || j == n[1] - 1;
+            if face {
+                (0..n[0]).for_each(|i| fix(i, j, k));
+            } else {
+                fix(0, j, k);
+                fix(n[0] - 1, j, k);
+            }
+        }
+    }
+}

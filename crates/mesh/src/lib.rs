@@ -1,0 +1,190 @@
+//! Watertight, 2-manifold triangle meshes of FRep models (inside is f >= 0).
+//!
+//! A uniform grid is cut into bricks; bricks are classified with interval
+//! arithmetic (empty and full ones skipped), surface bricks are sampled
+//! densely with the f32 batch evaluator and meshed by marching tetrahedra
+//! ([`tets`] argues why the result is closed and manifold), vertices are
+//! keyed by their global grid edge so bricks share them, and moved onto the
+//! surface by regula falsi on the batch evaluator; a last pass offsets them
+//! along their normals to cancel the chordal volume loss ([`inflate`]).
+//! Bricks run in parallel; the output depends only on the model and the
+//! options.
+//!
+//! ```
+//! use microfrep_core::{prims, Expr};
+//! use microfrep_mesh::{check::check, MeshOptions, Plan};
+//! let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
+//! let opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], 16);
+//! let mesh = Plan::new(&ball, &opts).unwrap().run(&|_| {}).unwrap();
+//! let r = check(&mesh);
+//! assert!(r.is_closed_manifold() && r.euler == 2);
+//! ```
+
+pub mod bounds;
+mod brick;
+pub mod check;
+mod classify;
+mod grid;
+pub mod inflate;
+pub mod memory;
+mod refine;
+mod stitch;
+pub mod tets;
+pub mod write;
+
+use brick::{mesh_brick, BrickMesh, Scratch};
+use classify::{classify, BrickClass};
+pub use grid::Grid;
+use microfrep_core::{Expr, GradBatchEval, Tape};
+use rayon::prelude::*;
+
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    #[error("{0}")]
+    Input(String),
+    #[error("{0}")]
+    TooLarge(String),
+    #[error("internal meshing error: {0}")]
+    Internal(String),
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+/// An indexed triangle mesh; triangles are counter-clockwise seen from
+/// outside.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub vertices: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+#[derive(Clone, Debug)]
+pub struct MeshOptions {
+    /// Box to mesh (min, max); the solid is clipped to it.
+    pub bounds: [[f64; 3]; 2],
+    /// Cells on the longest side of `bounds`.
+    pub resolution: usize,
+    /// Cells per brick side.
+    pub brick: usize,
+}
+
+impl MeshOptions {
+    pub fn new(bounds: [[f64; 3]; 2], resolution: usize) -> Self {
+        MeshOptions {
+            bounds,
+            resolution,
+            brick: 32,
+        }
+    }
+}
+
+/// A meshing job after interval classification, before the dense work:
+/// enough to predict its memory (see [`memory`]).
+pub struct Plan {
+    pub tape: Tape,
+    pub grid: Grid,
+    classes: Vec<BrickClass>,
+    thin_cells: std::sync::atomic::AtomicUsize,
+}
+
+impl Plan {
+    pub fn new(expr: &Expr, opts: &MeshOptions) -> Result<Plan, MeshError> {
+        if !(2..=256).contains(&opts.brick) {
+            return Err(MeshError::Input(format!(
+                "brick size {} must be between 2 and 256",
+                opts.brick
+            )));
+        }
+        let grid = Grid::new(opts.bounds, opts.resolution, opts.brick)?;
+        let tape = Tape::new(&clip(expr, opts.bounds));
+        let classes = classify(&tape, &grid);
+        Ok(Plan {
+            tape,
+            grid,
+            classes,
+            thin_cells: Default::default(),
+        })
+    }
+
+    /// Number of bricks that will be sampled densely.
+    pub fn surface_bricks(&self) -> usize {
+        self.classes
+            .iter()
+            .filter(|c| **c == BrickClass::Surface)
+            .count()
+    }
+
+    /// Meshes all surface bricks; `progress` is called with the number of
+    /// bricks done after each one.
+    pub fn run(&self, progress: &(dyn Fn(usize) + Sync)) -> Result<Mesh, MeshError> {
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let parts: Vec<BrickMesh> = (0..self.grid.brick_count())
+            .into_par_iter()
+            .map_init(
+                || Scratch::new(&self.tape, self.grid.brick),
+                |s, k| {
+                    if self.classes[k] != BrickClass::Surface {
+                        return BrickMesh::default();
+                    }
+                    let b = self.grid.brick_coords(k);
+                    let m = mesh_brick(&self.grid, &self.classes, b, s);
+                    progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+                    m
+                },
+            )
+            .collect();
+        let thin = parts.iter().map(|p| p.thin_cells).sum();
+        self.thin_cells
+            .store(thin, std::sync::atomic::Ordering::Relaxed);
+        let mut mesh = stitch::stitch(&self.grid, parts)?;
+        inflate::inflate(&self.tape, &mut mesh, self.grid.h);
+        Ok(mesh)
+    }
+
+    /// After [`Self::run`]: cells in surface-free bricks where interval
+    /// analysis could not exclude a feature thinner than a cell (such
+    /// features vanish from the mesh; they never leave a hole).
+    pub fn thin_cells(&self) -> usize {
+        self.thin_cells.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Unit outward normals (minus the normalised gradient) at the vertices.
+    pub fn normals(&self, mesh: &Mesh) -> Vec<[f32; 3]> {
+        let mut out = vec![[0.0f32; 3]; mesh.vertices.len()];
+        out.par_chunks_mut(4096)
+            .zip(mesh.vertices.par_chunks(4096))
+            .for_each_init(
+                || GradBatchEval::new(&self.tape),
+                |ev, (dst, src)| {
+                    let x: Vec<f32> = src.iter().map(|p| p[0]).collect();
+                    let y: Vec<f32> = src.iter().map(|p| p[1]).collect();
+                    let z: Vec<f32> = src.iter().map(|p| p[2]).collect();
+                    let mut g = vec![[0.0f32; 4]; src.len()];
+                    ev.eval(&x, &y, &z, &mut g);
+                    for (d, g) in dst.iter_mut().zip(&g) {
+                        let len = (g[1] * g[1] + g[2] * g[2] + g[3] * g[3]).sqrt();
+                        *d = if len > 0.0 && len.is_finite() {
+                            [-g[1] / len, -g[2] / len, -g[3] / len]
+                        } else {
+                            [0.0; 3]
+                        };
+                    }
+                },
+            );
+        out
+    }
+}
+
+/// The model intersected (min) with the box, so the mesh is closed where the
+/// solid leaves the box.
+fn clip(expr: &Expr, bounds: [[f64; 3]; 2]) -> Expr {
+    let p = Expr::xyz();
+    let mut f = expr.clone();
+    for a in 0..3 {
+        f = f.min(&p[a] - bounds[0][a]).min(bounds[1][a] - &p[a]);
+    }
+    f
+}

@@ -1,0 +1,74 @@
+//! Bounds from interval analysis, memory prediction and input errors.
+
+use microfrep_core::{prims, Expr, Tape};
+use microfrep_mesh::bounds::model_bounds;
+use microfrep_mesh::{memory, MeshError, MeshOptions, Plan};
+
+fn ball() -> Expr {
+    prims::sphere(&Expr::xyz(), &prims::v3([0.5, 0.0, -0.25]), 1.0)
+}
+
+#[test]
+fn bounds_of_a_ball_enclose_it_tightly() {
+    let b = model_bounds(&Tape::new(&ball())).unwrap();
+    let c = [0.5, 0.0, -0.25];
+    for a in 0..3 {
+        assert!(b[0][a] <= c[a] - 1.0 && b[0][a] > c[a] - 1.1, "{b:?}");
+        assert!(b[1][a] >= c[a] + 1.0 && b[1][a] < c[a] + 1.1, "{b:?}");
+    }
+}
+
+#[test]
+fn unbounded_models_ask_for_bounds() {
+    let half = prims::half_space(&Expr::xyz(), [0.0; 3], [0.0, 0.0, 1.0]);
+    let e = model_bounds(&Tape::new(&half)).unwrap_err();
+    assert!(e.to_string().contains("--bounds"), "{e}");
+}
+
+#[test]
+fn predicted_size_is_close_to_the_real_one() {
+    let opts = MeshOptions::new([[-0.6, -1.1, -1.35], [1.6, 1.1, 0.85]], 96);
+    let plan = Plan::new(&ball(), &opts).unwrap();
+    let est = memory::estimate(&plan);
+    let m = plan.run(&|_| {}).unwrap();
+    let ratio = est.triangles / m.triangles.len() as f64;
+    assert!((0.9..1.5).contains(&ratio), "{ratio}");
+    assert!(est.bytes > 60.0 * m.triangles.len() as f64);
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let bad = |bounds: [[f64; 3]; 2], n: usize| {
+        matches!(
+            Plan::new(&ball(), &MeshOptions::new(bounds, n)),
+            Err(MeshError::Input(_))
+        )
+    };
+    assert!(bad([[-1.0; 3], [1.0; 3]], 0));
+    assert!(bad([[-1.0; 3], [1.0, 1.0, -1.0]], 16));
+    assert!(bad([[f64::NAN; 3], [1.0; 3]], 16));
+    assert!(bad([[-1.0; 3], [1.0; 3]], 1 << 20));
+}
+
+#[test]
+fn a_model_missing_the_box_gives_an_empty_mesh() {
+    let opts = MeshOptions::new([[3.0; 3], [4.0; 3]], 16);
+    let m = Plan::new(&ball(), &opts).unwrap().run(&|_| {}).unwrap();
+    assert!(m.triangles.is_empty() && m.vertices.is_empty());
+}
+
+#[test]
+fn features_thinner_than_a_cell_vanish_and_are_reported() {
+    // A plate 0.002 thick between two node layers of a 0.1 grid.
+    let z = Expr::z();
+    let plate = 0.001 - (&z - 0.05).abs();
+    let opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], 20);
+    let plan = Plan::new(&plate, &opts).unwrap();
+    let m = plan.run(&|_| {}).unwrap();
+    assert!(m.triangles.is_empty());
+    assert!(plan.thin_cells() > 0);
+    // A ball resolved by the grid: nothing to report.
+    let plan = Plan::new(&ball(), &MeshOptions::new([[-1.0; 3], [2.0; 3]], 32)).unwrap();
+    assert!(!plan.run(&|_| {}).unwrap().triangles.is_empty());
+    assert_eq!(plan.thin_cells(), 0);
+}
