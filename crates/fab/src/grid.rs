@@ -1,0 +1,85 @@
+//! The slicing grid: layers along z, square pixels in x and y.
+
+use crate::error::{FabError, Result};
+
+/// Largest image side and pixel count accepted, so a typo in the pixel size
+/// gives an error instead of an out-of-memory abort.
+const MAX_SIDE: usize = 1 << 16;
+const MAX_PIXELS: usize = 1 << 28;
+const MAX_LAYERS: usize = 1 << 20;
+
+/// Layers of thickness `layer` over the z range of the box, each an image of
+/// `nx x ny` square pixels of side `pixel` whose outer corner is `min`.
+/// Samples sit at pixel centres and at the middle of each layer. The box is
+/// grown to a whole number of pixels and layers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SliceGrid {
+    pub min: [f64; 3],
+    pub pixel: f64,
+    pub layer: f64,
+    pub nx: usize,
+    pub ny: usize,
+    pub layers: usize,
+}
+
+fn count(len: f64, step: f64, what: &str, max: usize) -> Result<usize> {
+    // A small slack so 2 / 0.025 is 80 pixels, not 81.
+    let n = (len / step - 1e-9).ceil().max(1.0);
+    if n > max as f64 {
+        return Err(FabError::Invalid(format!(
+            "{what}: {n} exceeds the limit of {max} (step too small for the bounds?)"
+        )));
+    }
+    Ok(n as usize)
+}
+
+impl SliceGrid {
+    pub fn new(min: [f64; 3], max: [f64; 3], layer: f64, pixel: f64) -> Result<SliceGrid> {
+        for (name, v) in [("layer", layer), ("pixel", pixel)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(FabError::Invalid(format!(
+                    "{name} size must be positive, got {v}"
+                )));
+            }
+        }
+        for a in 0..3 {
+            if !(min[a].is_finite() && max[a].is_finite() && max[a] > min[a]) {
+                return Err(FabError::Invalid(format!(
+                    "bounds on axis {a} must be finite with min < max, got {} .. {}",
+                    min[a], max[a]
+                )));
+            }
+        }
+        let nx = count(max[0] - min[0], pixel, "image width", MAX_SIDE)?;
+        let ny = count(max[1] - min[1], pixel, "image height", MAX_SIDE)?;
+        if nx * ny > MAX_PIXELS {
+            return Err(FabError::Invalid(format!(
+                "image of {nx} x {ny} pixels exceeds the limit of {MAX_PIXELS} pixels"
+            )));
+        }
+        let layers = count(max[2] - min[2], layer, "layer count", MAX_LAYERS)?;
+        Ok(SliceGrid {
+            min,
+            pixel,
+            layer,
+            nx,
+            ny,
+            layers,
+        })
+    }
+
+    /// Height of the middle of layer `k`.
+    pub fn z(&self, k: usize) -> f64 {
+        self.min[2] + (k as f64 + 0.5) * self.layer
+    }
+
+    /// x of the centre of pixel column `i`.
+    pub fn x(&self, i: usize) -> f64 {
+        self.min[0] + (i as f64 + 0.5) * self.pixel
+    }
+
+    /// y of the centre of pixel row `j` (row 0 is the lowest y).
+    pub fn y(&self, j: usize) -> f64 {
+        self.min[1] + (j as f64 + 0.5) * self.pixel
+    }
+}

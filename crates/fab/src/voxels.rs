@@ -1,0 +1,181 @@
+//! Voxel export: occupancy (one byte per voxel, 1 inside) or f32 field
+//! values at voxel centres, x fastest then y then z, as NRRD, legacy VTK
+//! structured points, or raw bytes with a JSON sidecar. Written one z-slab
+//! at a time.
+
+use crate::error::{io_at, FabError, Result};
+use microfrep_core::{eval_grid_par, Tape};
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Limit on the voxel count, so a typo in the size is an error, not a
+/// disk-filling run.
+const MAX_VOXELS: usize = 1 << 32;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum VoxelFormat {
+    Raw,
+    Vtk,
+    Nrrd,
+}
+
+impl VoxelFormat {
+    /// From the output's extension: `.raw`, `.vtk` or `.nrrd`.
+    pub fn from_path(p: &Path) -> Result<VoxelFormat> {
+        match p.extension().and_then(|e| e.to_str()) {
+            Some("raw") => Ok(VoxelFormat::Raw),
+            Some("vtk") => Ok(VoxelFormat::Vtk),
+            Some("nrrd") => Ok(VoxelFormat::Nrrd),
+            _ => Err(FabError::Invalid(format!(
+                "{}: extension must be .raw, .vtk or .nrrd",
+                p.display()
+            ))),
+        }
+    }
+}
+
+/// The sampled lattice: `dims` voxels of side `spacing`, the first voxel's
+/// centre at `origin`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoxelGrid {
+    pub dims: [usize; 3],
+    pub spacing: f64,
+    pub origin: [f64; 3],
+}
+
+impl VoxelGrid {
+    pub fn new(min: [f64; 3], max: [f64; 3], voxel: f64) -> Result<VoxelGrid> {
+        if !(voxel.is_finite() && voxel > 0.0) {
+            return Err(FabError::Invalid(format!(
+                "voxel size must be positive, got {voxel}"
+            )));
+        }
+        let mut dims = [0; 3];
+        for a in 0..3 {
+            let len = max[a] - min[a];
+            if !(len.is_finite() && len > 0.0) {
+                return Err(FabError::Invalid(format!(
+                    "bounds on axis {a} must be finite with min < max"
+                )));
+            }
+            dims[a] = (len / voxel - 1e-9).ceil().max(1.0) as usize;
+        }
+        let n = dims.iter().map(|&d| d as f64).product::<f64>();
+        if n > MAX_VOXELS as f64 {
+            return Err(FabError::Invalid(format!(
+                "{} x {} x {} voxels exceed the limit of {MAX_VOXELS}",
+                dims[0], dims[1], dims[2]
+            )));
+        }
+        Ok(VoxelGrid {
+            dims,
+            spacing: voxel,
+            origin: [0, 1, 2].map(|a| min[a] + 0.5 * voxel),
+        })
+    }
+}
+
+/// Samples the model on `grid` and writes `out` (format from its
+/// extension); `.raw` gets a `.json` sidecar next to it. With `field` the
+/// values are f32, else occupancy bytes. Output appears only when complete.
+pub fn write_voxels(tape: &Tape, grid: &VoxelGrid, field: bool, out: &Path) -> Result<()> {
+    let format = VoxelFormat::from_path(out)?;
+    let tmp = partial(out);
+    let res = write_into(tape, grid, field, format, &tmp);
+    let res = res.and_then(|_| fs::rename(&tmp, out).map_err(io_at(out)));
+    if res.is_err() {
+        let _ = fs::remove_file(&tmp);
+        return res;
+    }
+    if format == VoxelFormat::Raw {
+        let side = out.with_extension("json");
+        fs::write(&side, sidecar(grid, field)).map_err(io_at(&side))?;
+    }
+    Ok(())
+}
+
+fn partial(out: &Path) -> PathBuf {
+    let name = out.file_name().map(|n| n.to_string_lossy().into_owned());
+    out.with_file_name(format!(
+        ".{}.partial-{}",
+        name.unwrap_or_default(),
+        std::process::id()
+    ))
+}
+
+fn write_into(
+    tape: &Tape,
+    g: &VoxelGrid,
+    field: bool,
+    format: VoxelFormat,
+    tmp: &Path,
+) -> Result<()> {
+    let f = fs::File::create(tmp).map_err(io_at(tmp))?;
+    let mut w = BufWriter::new(f);
+    let [nx, ny, nz] = g.dims;
+    let [ox, oy, oz] = g.origin;
+    let s = g.spacing;
+    let header = match format {
+        VoxelFormat::Raw => String::new(),
+        VoxelFormat::Nrrd => format!(
+            "NRRD0004\n# microfrep voxels\ntype: {}\ndimension: 3\nspace: 3D-right-handed\n\
+             sizes: {nx} {ny} {nz}\nspace directions: ({s},0,0) (0,{s},0) (0,0,{s})\n\
+             space origin: ({ox},{oy},{oz})\nendian: little\nencoding: raw\n\n",
+            if field { "float" } else { "uint8" }
+        ),
+        VoxelFormat::Vtk => format!(
+            "# vtk DataFile Version 3.0\nmicrofrep voxels\nBINARY\nDATASET STRUCTURED_POINTS\n\
+             DIMENSIONS {nx} {ny} {nz}\nORIGIN {ox} {oy} {oz}\nSPACING {s} {s} {s}\n\
+             POINT_DATA {}\nSCALARS {} 1\nLOOKUP_TABLE default\n",
+            nx * ny * nz,
+            if field {
+                "value float"
+            } else {
+                "occupancy unsigned_char"
+            }
+        ),
+    };
+    w.write_all(header.as_bytes()).map_err(io_at(tmp))?;
+    let mut bytes = Vec::new();
+    for k in 0..nz {
+        let vals = eval_grid_par(tape, [nx, ny, 1], [ox, oy, oz + k as f64 * s], [s, s, s]);
+        bytes.clear();
+        if field {
+            for v in vals {
+                // Legacy VTK binary data is big-endian.
+                let b = if format == VoxelFormat::Vtk {
+                    v.to_be_bytes()
+                } else {
+                    v.to_le_bytes()
+                };
+                bytes.extend_from_slice(&b);
+            }
+        } else {
+            bytes.extend(vals.iter().map(|&v| (v >= 0.0) as u8));
+        }
+        w.write_all(&bytes).map_err(io_at(tmp))?;
+    }
+    if format == VoxelFormat::Vtk {
+        w.write_all(b"\n").map_err(io_at(tmp))?;
+    }
+    w.into_inner()
+        .map_err(|e| FabError::Io {
+            path: tmp.to_path_buf(),
+            err: e.into_error(),
+        })?
+        .sync_all()
+        .map_err(io_at(tmp))
+}
+
+fn sidecar(g: &VoxelGrid, field: bool) -> String {
+    let [nx, ny, nz] = g.dims;
+    let [ox, oy, oz] = g.origin;
+    format!(
+        "{{\n  \"dims\": [{nx}, {ny}, {nz}],\n  \"spacing\": [{s}, {s}, {s}],\n  \
+         \"origin\": [{ox}, {oy}, {oz}],\n  \"type\": \"{}\",\n  \"endian\": \"little\",\n  \
+         \"order\": \"x fastest, then y, then z; origin is the centre of the first voxel\"\n}}\n",
+        if field { "float32" } else { "uint8 (1 inside)" },
+        s = g.spacing
+    )
+}
