@@ -8,7 +8,7 @@ use std::io::{BufRead, Write};
 
 #[derive(Args)]
 pub struct EvalArgs {
-    /// Model: a built-in example name.
+    /// Model: a HyperFun file (.hf) or a built-in example name.
     model: String,
     /// Coordinates x y z [x y z ...]; read from stdin (one point per line) if absent.
     #[arg(allow_negative_numbers = true)]
@@ -16,16 +16,42 @@ pub struct EvalArgs {
     /// Also print the gradient (df/dx df/dy df/dz).
     #[arg(long)]
     grad: bool,
+    /// HyperFun object to evaluate (default `my_model`, else the first).
+    #[arg(long)]
+    object: Option<String>,
+    /// HyperFun parameter a[K] = V, as K=V (repeatable).
+    #[arg(short = 'a', long = "param", value_parser = model::parse_param)]
+    params: Vec<(usize, f64)>,
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
-    let m = model::load(&a.model)?;
-    let tape = Tape::new(&m.expr);
+    let opts = model::Options {
+        object: a.object.clone(),
+        params: a.params.clone(),
+    };
+    let m = model::load_with(&a.model, &opts)?;
+    // HyperFun models have a second output: the run-time error code.
+    let tape = match &m.hf {
+        Some(hf) => hf.tape(),
+        None => Tape::new(&m.expr),
+    };
     let mut pe = PointEval::new(&tape);
     let mut ge = GradEval::new(&tape);
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let mut emit = |p: [f64; 3], out: &mut dyn Write| -> Result<()> {
+        if let Some(hf) = &m.hf {
+            let vals = pe.eval_all(p);
+            match hf.result(vals[0], vals[1]) {
+                Err(e) => writeln!(out, "error: {} at {}:{}", e.message, e.line, e.col)?,
+                Ok(v) if !a.grad => writeln!(out, "{v}")?,
+                Ok(_) => {
+                    let (v, g) = ge.eval(p);
+                    writeln!(out, "{v} {} {} {}", g[0], g[1], g[2])?;
+                }
+            }
+            return Ok(());
+        }
         if a.grad {
             let (v, g) = ge.eval(p);
             writeln!(out, "{v} {} {} {}", g[0], g[1], g[2])?;

@@ -1,8 +1,13 @@
 //! `microfrep`: a thin shell over the library crates. Argument parsing,
 //! model loading and printing only; the algorithms live in the crates.
 
+mod check_cmd;
 mod eval_cmd;
+mod mesh_cmd;
 mod model;
+mod render_cmd;
+mod slice_cmd;
+mod voxels_cmd;
 
 use clap::{Parser, Subcommand};
 
@@ -26,6 +31,16 @@ enum Cmd {
     },
     /// Evaluate a model at points given as arguments (x y z ...) or on stdin.
     Eval(eval_cmd::EvalArgs),
+    /// Parse and check a HyperFun model: objects, parameters, errors, warnings.
+    Check(check_cmd::CheckArgs),
+    /// Watertight triangle mesh of a model (.stl, .obj, .ply, .3mf).
+    Mesh(mesh_cmd::MeshArgs),
+    /// Slice into layer images (png), contours (svg) or a Common Layer Interface file (cli).
+    Slice(slice_cmd::SliceArgs),
+    /// Ray-cast image, cut-away view or section of a model.
+    Render(render_cmd::RenderArgs),
+    /// Occupancy or field values on a voxel grid (.raw + .json, .vtk, .nrrd).
+    Voxels(voxels_cmd::VoxelsArgs),
 }
 
 fn main() {
@@ -33,6 +48,11 @@ fn main() {
     let res = match cli.cmd {
         Cmd::Examples { name } => model::list_examples(name.as_deref()),
         Cmd::Eval(a) => eval_cmd::run(a),
+        Cmd::Check(a) => check_cmd::run(a),
+        Cmd::Mesh(a) => mesh_cmd::run(a),
+        Cmd::Slice(a) => slice_cmd::run(a),
+        Cmd::Render(a) => render_cmd::run(a),
+        Cmd::Voxels(a) => voxels_cmd::run(a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");
