@@ -1,1 +1,53 @@
-fn main() {}
+//! Benchmark driver: `bench/run SUITE` runs one suite, which prints
+//! `RESULT <case> key=value ...` lines. To add a suite: a module, an arm in
+//! `main`'s match and a line in `SUITES`.
+
+mod eval;
+mod hyperfun;
+mod mesh;
+mod slice;
+mod to_fidget;
+
+/// Suite names and what they measure, for the usage message.
+const SUITES: &[(&str, &str)] = &[
+    (
+        "eval",
+        "single-thread batch evaluation vs the fidget crate's VM and JIT",
+    ),
+    (
+        "mesh",
+        "tori-ball block meshing (128^3, 256^3) vs fidget's octree mesher, 2 threads",
+    ),
+    (
+        "hyperfun",
+        "HyperFun models (gyroid, tori-ball) lowered vs the same expressions via the Rust API",
+    ),
+    (
+        "slice",
+        "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
+    ),
+];
+
+fn usage() -> String {
+    let lines: Vec<String> = SUITES
+        .iter()
+        .map(|(n, d)| format!("  {n:<10} {d}"))
+        .collect();
+    format!("usage: bench/run SUITE\nsuites:\n{}", lines.join("\n"))
+}
+
+fn main() {
+    let name = std::env::args().nth(1).unwrap_or_default();
+    let result = match name.as_str() {
+        "eval" => eval::run(),
+        "mesh" => mesh::run(),
+        "slice" => slice::run(),
+        "hyperfun" => hyperfun::run(),
+        "" => Err(usage()),
+        other => Err(format!("unknown suite '{other}'\n{}", usage())),
+    };
+    if let Err(e) = result {
+        eprintln!("bench/run: {e}");
+        std::process::exit(2);
+    }
+}
