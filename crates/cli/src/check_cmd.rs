@@ -1,10 +1,12 @@
 //! `microfrep check MODEL.hf`: parse and lower a HyperFun file, list its
-//! objects and parameters, report errors and warnings. Exits non-zero on an
-//! error.
+//! objects and parameters, report every error and warning with
+//! `file:line:col`, the source line and a caret. Exits non-zero on an error.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use microfrep_hyperfun::library::Registry;
 use microfrep_hyperfun::lower::{self, calls_of};
+use microfrep_hyperfun::{ast::Pos, Diagnostic, Diagnostics, Severity};
 use std::sync::Arc;
 
 #[derive(Args)]
@@ -16,55 +18,115 @@ pub struct CheckArgs {
     object: Option<String>,
 }
 
-/// `file:line:col: message`, the source line and a caret under the column.
-fn located(file: &str, src: &str, line: u32, col: u32, what: &str, msg: &str) -> String {
-    let text = src
-        .lines()
-        .nth(line.saturating_sub(1) as usize)
-        .unwrap_or("");
-    let pad = " ".repeat(col.saturating_sub(1) as usize);
-    format!("{file}:{line}:{col}: {what}: {msg}\n  {text}\n  {pad}^")
+/// Calls whose result in the reference interpreter is a bug or not
+/// portable, with the warning `check` gives for each.
+const SUSPECT_CALLS: &[(&str, &str)] = &[
+    (
+        "sign",
+        "sign() always returns 1 in HyperFun (a bug of the reference interpreter, kept for \
+         compatibility); use x/abs(x) for the real sign",
+    ),
+    (
+        "hfa_cerp",
+        "hfA_Cerp is linear interpolation in HyperFun (the reference maps it to hfA_Lerp's code)",
+    ),
+    (
+        "hfr",
+        "hfR calls back into R in the R package; here (as in the reference data) it returns 0",
+    ),
+    (
+        "hfa_noisep",
+        "hfA_NoiseP: the reference seeds its noise tables from the clock; values here are \
+         deterministic and differ from any run of the reference",
+    ),
+    (
+        "hfa_turbulence",
+        "hfA_Turbulence: the reference seeds its noise tables from the clock; values here are \
+         deterministic and differ from any run of the reference",
+    ),
+];
+
+fn diag(severity: Severity, pos: Pos, message: impl Into<String>) -> Diagnostic {
+    Diagnostic {
+        severity,
+        pos,
+        message: message.into(),
+    }
 }
 
 pub fn run(a: CheckArgs) -> Result<()> {
     let src = std::fs::read_to_string(&a.model).with_context(|| format!("reading {}", a.model))?;
     let options = microfrep_hyperfun::Options::default();
-    let program = match microfrep_hyperfun::parse_with(&src, &a.model, options) {
-        Ok((p, warnings)) => {
-            eprint!("{}", warnings.render(&src));
-            Arc::new(p)
-        }
+    let (program, mut items) = match microfrep_hyperfun::parse_with(&src, &a.model, options) {
+        Ok((p, warnings)) => (Arc::new(p), warnings.items),
         Err(d) => {
             eprint!("{}", d.render(&src));
             bail!("{}: {} error(s)", a.model, d.errors().count());
         }
     };
-    for o in &program.objects {
+
+    // Every object is lowered on its own, so errors in objects other than
+    // the evaluated one are found too.
+    let registry = Registry::standard();
+    let mut unlocated = Vec::new();
+    for (i, o) in program.objects.iter().enumerate() {
         println!(
             "object {}(x[{}], a[{}], s[{}])",
             o.name, o.x_size, o.a_size, o.s_size
         );
-    }
-    let m = match lower::load_program(program.clone(), a.object.as_deref(), &[]) {
-        Ok(m) => m,
-        Err(e) => {
-            let (l, c) = (e.pos.line, e.pos.col);
-            eprintln!("{}", located(&a.model, &src, l, c, "error", &e.message));
-            bail!("{}: check failed", a.model);
+        if let Err(e) = lower::lower(program.clone(), i, &registry, &[]) {
+            if e.pos.line == 0 {
+                unlocated.push(format!("object '{}': {}", o.name, e.message));
+            } else {
+                items.push(diag(Severity::Error, e.pos, e.message));
+            }
         }
+    }
+    let chosen = lower::select_object(&program, a.object.as_deref());
+    match chosen {
+        Some(i) => {
+            let o = &program.objects[i];
+            println!("evaluated object: {}", o.name);
+            let params: Vec<String> = (1..=o.a_size).map(|k| format!("a[{k}]")).collect();
+            println!(
+                "parameters: {} (default 0; set with -a K=V)",
+                params.join(" ")
+            );
+            if let Ok(m) = lower::lower(program.clone(), i, &registry, &[]) {
+                if !m.lowered {
+                    println!(
+                        "note: control flow depends on the point; evaluated per point \
+                         (slower, no interval pruning)"
+                    );
+                }
+            }
+        }
+        None => unlocated.push(match &a.object {
+            Some(n) => format!("no object named '{n}'"),
+            None => "the file defines no object".into(),
+        }),
+    }
+    for (name, msg) in SUSPECT_CALLS {
+        for p in calls_of(&program, name) {
+            items.push(diag(Severity::Warning, p, *msg));
+        }
+    }
+    items.sort_by_key(|d| d.pos);
+    items.dedup();
+    let report = Diagnostics {
+        file: a.model.clone(),
+        items,
+        ..Default::default()
     };
-    println!("evaluated object: {}", m.object);
-    let names: Vec<&str> = m.params.iter().map(|(n, _)| n.as_str()).collect();
-    println!("parameters: {}", names.join(" "));
-    if !m.lowered {
-        println!(
-            "note: control flow depends on the point; evaluated per point (no interval pruning)"
-        );
+    eprint!("{}", report.render(&src));
+    for m in &unlocated {
+        eprintln!("{}: error: {m}", a.model);
     }
-    for p in calls_of(&program, "sign") {
-        let msg = "sign() always returns 1 in HyperFun (reference interpreter bug, kept for compatibility)";
-        eprintln!("{}", located(&a.model, &src, p.line, p.col, "warning", msg));
+    let errors = report.errors().count() + unlocated.len();
+    if errors > 0 {
+        bail!("{}: {errors} error(s)", a.model);
     }
-    println!("ok");
+    let warnings = report.items.len();
+    println!("ok ({warnings} warning(s))");
     Ok(())
 }

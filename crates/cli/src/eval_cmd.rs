@@ -5,6 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use microfrep_core::{GradEval, PointEval, Tape};
 use std::io::{BufRead, Write};
+use std::path::Path;
 
 #[derive(Args)]
 pub struct EvalArgs {
@@ -24,7 +25,24 @@ pub struct EvalArgs {
     params: Vec<(usize, f64)>,
 }
 
+/// For a HyperFun file with parse errors: prints all of them with their
+/// source lines and carets (the loader reports only the first) and fails.
+fn report_parse_errors(path: &str) -> Result<()> {
+    let is_hf = path.to_ascii_lowercase().ends_with(".hf") || Path::new(path).is_file();
+    let Ok(src) = std::fs::read_to_string(path) else {
+        return Ok(()); // the loader reports unreadable files
+    };
+    if is_hf {
+        if let Err(d) = microfrep_hyperfun::parse(&src, path) {
+            eprint!("{}", d.render(&src));
+            bail!("{path}: {} error(s)", d.errors().count());
+        }
+    }
+    Ok(())
+}
+
 pub fn run(a: EvalArgs) -> Result<()> {
+    report_parse_errors(&a.model)?;
     let opts = model::Options {
         object: a.object.clone(),
         params: a.params.clone(),
@@ -61,6 +79,8 @@ pub fn run(a: EvalArgs) -> Result<()> {
         Ok(())
     };
     if !a.coords.is_empty() {
+        // `is_multiple_of` needs Rust 1.87; the workspace supports 1.85.
+        #[allow(clippy::manual_is_multiple_of)]
         if a.coords.len() % 3 != 0 {
             bail!("coordinates come in threes (x y z); got {}", a.coords.len());
         }

@@ -95,7 +95,7 @@ impl GridField {
             });
         }
         for a in 0..3 {
-            if !(min[a] < max[a]) || !min[a].is_finite() || !max[a].is_finite() {
+            if !min[a].is_finite() || !max[a].is_finite() || min[a] >= max[a] {
                 return Err(GridError::BadBox(a));
             }
         }
@@ -167,7 +167,7 @@ impl GridField {
     fn locate(&self, a: usize, v: f64) -> (usize, f64, bool) {
         let n = self.dims[a];
         let t = (v - self.min[a]) / self.spacing(a);
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             return (0, 0.0, false);
         }
         if t >= (n - 1) as f64 {

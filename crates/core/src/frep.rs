@@ -12,14 +12,14 @@ use crate::expr::Expr;
 fn r_root(f1: &Expr, f2: &Expr, alpha: &Expr) -> Expr {
     let s = f1.square() + f2.square();
     match alpha.as_const() {
-        Some(a) if a == 0.0 => s.sqrt(),
+        Some(0.0) => s.sqrt(),
         _ => (s - 2.0 * alpha * f1 * f2).sqrt(),
     }
 }
 
 fn scale_alpha(e: Expr, alpha: &Expr) -> Expr {
     match alpha.as_const() {
-        Some(a) if a == 0.0 => e,
+        Some(0.0) => e,
         _ => e / (1.0 + alpha),
     }
 }

@@ -196,9 +196,12 @@ impl Graph {
             (BinaryOp::Add, Some(z), _) if z == 0.0 && z.is_sign_negative() => return b,
             (BinaryOp::Add, _, Some(z)) if z == 0.0 && z.is_sign_negative() => return a,
             (BinaryOp::Sub, _, Some(z)) if z == 0.0 && z.is_sign_positive() => return a,
-            (BinaryOp::Mul, Some(o), _) if o == 1.0 => return b,
+            (BinaryOp::Mul, Some(1.0), _) => return b,
             (BinaryOp::Mul, _, Some(o)) | (BinaryOp::Div, _, Some(o)) if o == 1.0 => return a,
             (BinaryOp::Min | BinaryOp::Max, _, _) if a == b => return a,
+            // `a * a` is a square: same value bit for bit, but its interval
+            // is never negative (a product of two independent ranges can be).
+            (BinaryOp::Mul, _, _) if a == b => return self.unary(UnaryOp::Square, a),
             _ => {}
         }
         let (a, b) = if op.commutative() && b < a {

@@ -39,6 +39,10 @@ fn up(v: f64) -> f64 {
     v.next_up().next_up()
 }
 
+// `add`, `mul`, ... take and return plain values and sit next to ops with
+// no std trait (`sqrt`, `hull`); the names read like the formulas they
+// implement, so the std operator traits are not used for them.
+#[allow(clippy::should_implement_trait)]
 impl Interval {
     pub const ENTIRE: Interval = ENTIRE;
 
@@ -315,7 +319,7 @@ impl Interval {
             Mod => mod_bounds(self, o),
             Rem => {
                 let m = o.lo.abs().max(o.hi.abs());
-                if !(m > 0.0) {
+                if m.is_nan() || m <= 0.0 {
                     return Interval::nan();
                 }
                 let b_apart = o.lo > 0.0 || o.hi < 0.0;
@@ -426,7 +430,8 @@ fn compare(always: bool, never: bool) -> Interval {
 /// Bounds of a 2pi-periodic function with maxima at `phase + pi/2 + 2k pi`
 /// and minima at `phase - pi/2 + 2k pi` (sin: phase 0, cos: phase -pi/2).
 fn periodic_bounds(v: Interval, phase: f64, f: fn(f64) -> f64) -> Interval {
-    if !(v.width() < 2.0 * PI) || !v.lo.is_finite() || !v.hi.is_finite() {
+    // NaN widths fail `is_finite` first.
+    if !v.lo.is_finite() || !v.hi.is_finite() || v.width() >= 2.0 * PI {
         return Interval::new(-1.0, 1.0);
     }
     let (a, b) = (f(v.lo), f(v.hi));
@@ -449,7 +454,7 @@ fn periodic_bounds(v: Interval, phase: f64, f: fn(f64) -> f64) -> Interval {
 }
 
 fn tri_bounds(v: Interval) -> Interval {
-    if !(v.width() < 2.0) || !v.lo.is_finite() {
+    if !v.lo.is_finite() || !v.hi.is_finite() || v.width() >= 2.0 {
         return UNIT;
     }
     let (a, b) = (ops::tri_wave(v.lo), ops::tri_wave(v.hi));

@@ -2,6 +2,9 @@
 //! seeded gradient noise for determinism, range, lattice zeros, period,
 //! gradient against central differences, interval soundness and batch mode.
 
+// Expected values are the reference interpreter's, 17 significant digits.
+#![allow(clippy::excessive_precision)]
+
 use microfrep_core::noise::{gradient_noise, noise_g, GradientNoise, NOISE_BOUND, NOISE_SLOPE};
 use microfrep_core::{BatchEval, Expr, Field, GradEval, Interval, IntervalEval, PointEval, Tape};
 

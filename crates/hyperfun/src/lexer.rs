@@ -199,6 +199,8 @@ fn number(b: &[u8], mut i: usize) -> (Tok, usize) {
 }
 
 #[cfg(test)]
+// Expected literal values are the reference's, 17 significant digits.
+#[allow(clippy::excessive_precision)]
 mod tests {
     use super::*;
 

@@ -171,3 +171,111 @@ fn mutated_corpus_files_never_panic() {
     }
     assert!(loaded > 0, "some mutants should still load");
 }
+
+#[test]
+fn unreachable_error_sites_are_pruned_and_reachable_ones_kept() {
+    // sqrt of a sum of squares (written with `*`) can never fail.
+    let m = model(
+        "my_model(x[3], a[1]) { r = sqrt(x[1]*x[1] + x[2]*x[2] + x[3]*x[3]); my_model = 1 - r; }",
+    );
+    assert_eq!(m.error.as_const(), Some(0.0));
+    // sqrt(x[1]) can; a parameter counts as unbounded.
+    let m = model("my_model(x[3], a[1]) { my_model = sqrt(a[1]*a[1]) + 1/a[1] + sqrt(x[1]); }");
+    assert_eq!(m.error.as_const(), None);
+    let r = m.eval_points(&[[-1.0, 0.0, 0.0], [4.0, 0.0, 0.0]]);
+    assert_eq!(
+        r[0].clone().unwrap_err().message,
+        "Negative value for square root"
+    );
+    assert_eq!(r[1].clone().unwrap_err().message, "Division by zero");
+}
+
+#[test]
+fn value_is_nan_where_an_error_is_raised() {
+    let m = model("my_model(x[3], a[1]) {\n  my_model = 1 / x[1] - 2;\n}\n");
+    let tape = m.tape();
+    let mut pe = PointEval::new(&tape);
+    assert!(pe.eval([0.0, 0.0, 0.0]).is_nan());
+    assert_eq!(pe.eval([0.25, 0.0, 0.0]), 2.0);
+    let mut out = [0.0f32; 2];
+    BatchEval::new(&tape).eval(&[0.0, 0.25], &[0.0; 2], &[0.0; 2], &mut out);
+    assert!(out[0].is_nan() && out[1] == 2.0);
+}
+
+#[test]
+fn error_census_counts_grid_points_per_site() {
+    let m = model("my_model(x[3], a[1]) {\n  my_model = sqrt(x[1]) + 1 / x[2];\n}\n");
+    let xs: Vec<f64> = (0..10).map(|i| i as f64 - 4.5).collect(); // 5 negative
+    let ys: Vec<f64> = (0..4).map(|j| j as f64 - 1.0).collect(); // one 0
+    let zs = [0.0, 1.0, 2.0];
+    let c = m.error_census(&xs, &ys, &zs);
+    assert_eq!(c.samples, 120);
+    // The right operand runs first: y = 0 fails at "/" wherever it is 0;
+    // elsewhere x < 0 fails at sqrt.
+    let div = 10 * 3;
+    let sqrt = 5 * 3 * 3;
+    assert_eq!(c.errors, div + sqrt);
+    let by: Vec<(&str, u64)> = c
+        .sites
+        .iter()
+        .map(|(e, n)| (e.message.as_str(), *n))
+        .collect();
+    assert!(by.contains(&("Division by zero", div)), "{by:?}");
+    assert!(
+        by.contains(&("Negative value for square root", sqrt)),
+        "{by:?}"
+    );
+    // No reachable site: nothing evaluated, nothing counted.
+    let ok = model("my_model(x[3], a[1]) { my_model = x[1]*x[1] - 1; }");
+    let c = ok.error_census(&xs, &ys, &zs);
+    assert_eq!((c.samples, c.errors), (120, 0));
+    // A big grid where errors sit in one corner: intervals skip the rest.
+    let big: Vec<f64> = (0..200).map(|i| i as f64 * 0.01 - 0.005).collect();
+    let m = model("my_model(x[3], a[1]) { my_model = sqrt(x[1]) + 1; }");
+    let c = m.error_census(&big, &big, &big);
+    assert_eq!(c.errors, 200 * 200);
+}
+
+#[test]
+fn distance_ellipsoid_with_constant_axes_stays_lowered() {
+    let src = "my_model(x[3], a[1]) { array c[3]; c = [0.5, 0, -0.25]; \
+               t = hfShift3D(x, 0.1, 0, 0); my_model = hfDEllipsoid(x, c, 1, 2, 0.5); }";
+    let m = model(src);
+    assert!(m.lowered);
+    // Same values as the per-point evaluation with constant coordinates
+    // (the coordinates folded into the program).
+    for p in [
+        [0.3, 0.4, 0.5],
+        [1.5, -0.7, 2.2],
+        [0.6, 0.0, -0.25],
+        [-2.0, 1.0, 0.1],
+    ] {
+        let fixed = src.replace("array c[3];", "array c[3], q[3];").replace(
+            "t = hfShift3D(x, 0.1, 0, 0);",
+            &format!(
+                "q = [{}, {}, {}]; t = hfShift3D(q, 0.1, 0, 0);",
+                p[0], p[1], p[2]
+            ),
+        );
+        let fixed = fixed.replace("hfDEllipsoid(x,", "hfDEllipsoid(q,");
+        let want = model(&fixed).eval_points(&[[0.0; 3]])[0].clone().unwrap();
+        let got = m.eval_points(&[p])[0].clone().unwrap();
+        assert_eq!(got, want, "{p:?}");
+    }
+    // Its interval bounds the values in a box, and its gradient is a unit
+    // vector away from the centre.
+    let tape = m.tape();
+    let b = IntervalEval::new(&tape).eval(
+        Interval::new(0.0, 0.5),
+        Interval::new(0.5, 1.0),
+        Interval::new(-0.5, 0.0),
+    );
+    for i in 0..=4 {
+        let p = [0.125 * i as f64, 0.5 + 0.125 * i as f64, -0.125 * i as f64];
+        let v = m.eval_points(&[p])[0].clone().unwrap();
+        assert!(b.lo <= v && v <= b.hi, "{v} not in {b:?}");
+        let (_, g) = GradEval::new(&tape).eval(p);
+        let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        assert!((n - 1.0).abs() < 1e-9, "{g:?}");
+    }
+}

@@ -67,11 +67,6 @@ fn probes_match_reference_parse_errors() {
     let strict = Options { accept_cr: false };
     let (mut checked, mut bad) = (0, Vec::new());
     for r in &rows {
-        // The distance blends (LIBRARY.md section 5) are not in the library
-        // registry yet, so their names are not functions.
-        if ["lib_duni", "lib_dint", "lib_dsub"].contains(&r[0].as_str()) {
-            continue;
-        }
         let (name, program, status, message) = (&r[0], &r[1], &r[6], &r[7]);
         let got = parse_with(program, name, strict);
         if status == "PARSE_ERROR" {

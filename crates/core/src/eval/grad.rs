@@ -49,9 +49,9 @@ fn field_dual(f: &dyn Field, comp: u8, q: [Dual; 3]) -> Dual {
     };
     let mut d = [0.0; 3];
     for k in 0..3 {
-        for a in 0..3 {
+        for (a, da) in d.iter_mut().enumerate() {
             if g[k] != 0.0 {
-                d[a] += g[k] * q[k].1[a];
+                *da += g[k] * q[k].1[a];
             }
         }
     }

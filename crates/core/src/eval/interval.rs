@@ -31,6 +31,18 @@ impl<'t> IntervalEval<'t> {
     }
 
     pub fn eval_output(&mut self, k: usize, x: Interval, y: Interval, z: Interval) -> Interval {
+        self.run(x, y, z);
+        self.regs[self.tape.outputs[k] as usize]
+    }
+
+    /// Bounds of every output, in one pass over the tape.
+    pub fn eval_all(&mut self, x: Interval, y: Interval, z: Interval) -> Vec<Interval> {
+        self.run(x, y, z);
+        let r = &self.regs;
+        self.tape.outputs.iter().map(|&o| r[o as usize]).collect()
+    }
+
+    fn run(&mut self, x: Interval, y: Interval, z: Interval) {
         let r = &mut self.regs;
         r[REG_X as usize] = x;
         r[REG_Y as usize] = y;
@@ -63,6 +75,5 @@ impl<'t> IntervalEval<'t> {
                 }
             }
         }
-        r[self.tape.outputs[k] as usize]
     }
 }

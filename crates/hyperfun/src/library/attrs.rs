@@ -1,5 +1,6 @@
-//! Scalar attribute helpers `hfA_*` (LIBRARY.md section 7). The pattern,
-//! lookup-table, colour and noise helpers are not registered yet.
+//! Scalar attribute helpers `hfA_*` (LIBRARY.md section 7) and `hfA_Union`.
+//! The array-writing helpers are in `attr_arrays`, the patterns and noise in
+//! `attr_patterns`.
 
 use super::{el, Arg, Kind::*, Output, Registry, EPS};
 use microfrep_core::Expr;

@@ -5,7 +5,10 @@
 use super::{el, point3, Arg, Kind::*, Output, Registry, EPS};
 use microfrep_core::Expr;
 
-/// The reference's value of pi for degree conversion.
+/// The reference's value of pi for degree conversion. Deliberately the
+/// truncated value the C code uses (not `std::f64::consts::PI`): results must
+/// match the reference interpreter.
+#[allow(clippy::approx_constant)]
 const PI: f64 = 3.141592;
 
 /// `atanh(v) = ln((1 + v)/(1 - v))/2`.

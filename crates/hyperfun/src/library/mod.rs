@@ -6,14 +6,19 @@
 //! Adding a function is one `register` call; the parser asks the registry
 //! which names are functions and what they take.
 
+mod attr_arrays;
+mod attr_patterns;
 mod attrs;
 mod blends;
 mod conv;
 mod conv_arc;
+mod dellipsoid;
+mod extend;
 mod prims;
 mod sardef;
 mod transforms;
 
+pub use extend::{add_extension, extensions, Extension};
 use microfrep_core::Expr;
 use std::collections::HashMap;
 
@@ -67,6 +72,9 @@ pub struct Output {
     /// The builder needed a constant where it got a point-dependent value
     /// (e.g. a term count); the model must take the per-point fallback.
     pub needs_constants: bool,
+    /// A static error in the arguments (e.g. an unknown kind code); the
+    /// model fails to load with this message at the call's position.
+    pub error: Option<String>,
 }
 
 impl Output {
@@ -75,6 +83,7 @@ impl Output {
             value,
             writes: Vec::new(),
             needs_constants: false,
+            error: None,
         }
     }
     pub fn writes(value: Expr, writes: Vec<(usize, Vec<Expr>)>) -> Output {
@@ -82,6 +91,7 @@ impl Output {
             value,
             writes,
             needs_constants: false,
+            error: None,
         }
     }
     pub fn needs_constants() -> Output {
@@ -89,6 +99,16 @@ impl Output {
             value: Expr::constant(f64::NAN),
             writes: Vec::new(),
             needs_constants: true,
+            error: None,
+        }
+    }
+    /// A call whose (constant) arguments are invalid.
+    pub fn error(message: impl Into<String>) -> Output {
+        Output {
+            value: Expr::constant(f64::NAN),
+            writes: Vec::new(),
+            needs_constants: false,
+            error: Some(message.into()),
         }
     }
 }
@@ -119,8 +139,16 @@ impl Registry {
         }
     }
 
-    /// The library of the reference interpreter.
+    /// The library of the reference interpreter plus the installed
+    /// extensions ([`add_extension`]).
     pub fn standard() -> Registry {
+        let mut r = Registry::reference();
+        extend::apply(&mut r);
+        r
+    }
+
+    /// The library of the reference interpreter only.
+    pub fn reference() -> Registry {
         let mut r = Registry::empty();
         prims::register(&mut r);
         transforms::register(&mut r);
@@ -129,6 +157,8 @@ impl Registry {
         conv::register(&mut r);
         conv_arc::register(&mut r);
         attrs::register(&mut r);
+        attr_arrays::register(&mut r);
+        attr_patterns::register(&mut r);
         r
     }
 

@@ -175,8 +175,22 @@ fn noise_g(a: &[Arg]) -> Output {
     }))
 }
 
+/// Sentinel of `hfDConeX/Y/Z` for a point array whose length is not 3
+/// (not the usual one).
+pub const SENTINEL_DCONE: f64 = -11111111111.0;
+/// Sentinel of `hfDCylinder`.
+pub const SENTINEL_DCYLINDER: f64 = -11111111111.1;
+
+/// Like [`point3`] with a function-specific sentinel.
+fn point3_or(args: &[Arg], sentinel: f64, f: impl FnOnce(&[Expr]) -> Expr) -> Expr {
+    if args[0].array().len() != 3 {
+        return Expr::constant(sentinel);
+    }
+    point3(args, f)
+}
+
 fn d_cone<const K: usize>(a: &[Arg]) -> Output {
-    Output::value(point3(a, |p| {
+    Output::value(point3_or(a, SENTINEL_DCONE, |p| {
         let d = delta(p, a[1].array());
         let (i, j) = across(K);
         let t = a[2].real().atan();
@@ -185,7 +199,7 @@ fn d_cone<const K: usize>(a: &[Arg]) -> Output {
 }
 
 fn d_cylinder(a: &[Arg]) -> Output {
-    Output::value(point3(a, |p| {
+    Output::value(point3_or(a, SENTINEL_DCYLINDER, |p| {
         let (c, u) = (a[1].array(), a[2].array());
         let w: Vec<Expr> = (0..3).map(|k| el(c, k) - &p[k]).collect();
         let u: Vec<Expr> = (0..3).map(|k| el(u, k)).collect();
@@ -261,7 +275,14 @@ pub(super) fn register(r: &mut Registry) {
     r.register("hfdtorusz", P4, d_torus::<2>);
     r.register("hfsawtooth", &[R, R, R, R], sawtooth);
     r.register("hfbeziervolume", &[A, R, R, R, A, A], bezier_volume);
-    r.register("hfdellipsoid", P5, d_ellipsoid);
+    r.register("hfdellipsoid", P5, super::dellipsoid::d_ellipsoid);
+    r.register("hfr", &[A, R], r_callback);
+}
+
+/// `hfR(p, index)` calls back into R in the R package; outside R (and in
+/// the reference data, whose stub returns 0) it is 0. `check` warns.
+fn r_callback(_: &[Arg]) -> Output {
+    Output::value(Expr::constant(0.0))
 }
 
 /// Bernstein polynomial `C(n, i) (1 - t)^(n - i) t^i`.
@@ -300,67 +321,4 @@ fn bezier_volume(a: &[Arg]) -> Output {
         let clip = r0_and(&r0_and(&slab(0), &slab(1)), &slab(2));
         r0_and(&clip, &sum)
     }))
-}
-
-/// Signed distance to an ellipsoid by Newton iteration on the Lagrange
-/// parameter, as the C code does. The iteration count depends on the point,
-/// so it is computed on numbers: symbolic arguments send the model to the
-/// per-point fallback.
-fn d_ellipsoid(a: &[Arg]) -> Output {
-    let p = a[0].array();
-    if p.len() != 3 {
-        return Output::value(Expr::constant(SENTINEL));
-    }
-    let mut v = [0.0; 9];
-    let args = p.iter().cloned().chain((0..3).map(|k| el(a[1].array(), k)));
-    let args = args.chain((2..5).map(|k| a[k].real()));
-    for (slot, e) in v.iter_mut().zip(args) {
-        match e.as_const() {
-            Some(c) => *slot = c,
-            None => return Output::needs_constants(),
-        }
-    }
-    Output::value(Expr::constant(d_ellipsoid_num(v)))
-}
-
-fn d_ellipsoid_num(v: [f64; 9]) -> f64 {
-    let [p1, p2, p3, c1, c2, c3, ra, rb, rc] = v;
-    if ra.abs() < 1e-6 || rb.abs() < 1e-6 || rc.abs() < 1e-6 {
-        return SENTINEL;
-    }
-    let (dx, dy, dz) = (p1 - c1, p2 - c2, p3 - c3);
-    let (a2, b2, c2s) = (ra * ra, rb * rb, rc * rc);
-    let inside = (dx / ra).powi(2) + (dy / rb).powi(2) + (dz / rc).powi(2) < 1.0;
-    let mut t = if inside {
-        0.0
-    } else {
-        ra.max(rb).max(rc) * (dx * dx + dy * dy + dz * dz).sqrt()
-    };
-    for _ in 0..128 {
-        let (pp, q, w) = (t + a2, t + b2, t + c2s);
-        let s = pp * pp * q * q * w * w
-            - a2 * dx * dx * q * q * w * w
-            - b2 * dy * dy * pp * pp * w * w
-            - c2s * dz * dz * pp * pp * q * q;
-        if s.abs() < 1e-6 {
-            break;
-        }
-        let ds = 2.0
-            * (pp * q * w * (q * w + pp * w + pp * q)
-                - a2 * dx * dx * q * w * (q + w)
-                - b2 * dy * dy * pp * w * (pp + w)
-                - c2s * dz * dz * pp * q * (pp + q));
-        t -= s / ds;
-    }
-    let near = [
-        (a2 * p1 + t * c1) / (t + a2),
-        (b2 * p2 + t * c2) / (t + b2),
-        (c2s * p3 + t * c3) / (t + c2s),
-    ];
-    let d = ((near[0] - p1).powi(2) + (near[1] - p2).powi(2) + (near[2] - p3).powi(2)).sqrt();
-    if inside {
-        d
-    } else {
-        -d
-    }
 }

@@ -76,6 +76,9 @@ pub struct Exec<'p> {
     table: &'p ErrorTable,
     /// Error code so far (0 = none).
     pub err: Expr,
+    /// Every error site met, in evaluation order: (truth value of "this
+    /// error is raised here", code). `err` is their first-wins fold.
+    pub sites: Vec<(Expr, f64)>,
     /// Truth value of "this statement runs" (inside point-dependent `if`s).
     guard: Expr,
     budget: u64,
@@ -88,6 +91,7 @@ impl<'p> Exec<'p> {
             registry,
             table,
             err: c(0.0),
+            sites: Vec::new(),
             guard: c(1.0),
             budget: LOOP_BUDGET,
         }
@@ -108,6 +112,7 @@ impl<'p> Exec<'p> {
             line: pos.line,
             col: pos.col,
         });
+        self.sites.push((hit.clone(), code));
         let new = Expr::select(hit, c(code), c(0.0));
         self.err = Expr::select(self.err.clone(), self.err.clone(), new);
     }
@@ -387,6 +392,9 @@ impl<'p> Exec<'p> {
             let out = (f.build)(&vals);
             if out.needs_constants {
                 return Err(Stop::NeedsPoint);
+            }
+            if let Some(m) = out.error {
+                return Err(Stop::Static(format!("{name}: {m}"), pos));
             }
             for (k, v) in out.writes {
                 if let ExprKind::Var(n) = &args[k].kind {

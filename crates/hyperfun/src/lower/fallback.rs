@@ -33,7 +33,13 @@ impl Interp {
         match ex.run(obj, inputs) {
             Ok(v) => {
                 let code = ex.err.as_const().unwrap_or(f64::NAN);
-                (v.as_const().unwrap_or(f64::NAN), code)
+                // As in the lowered graph: no value where an error is raised.
+                let v = if code == 0.0 {
+                    v.as_const().unwrap_or(f64::NAN)
+                } else {
+                    f64::NAN
+                };
+                (v, code)
             }
             // With constant inputs every condition is constant, and static
             // errors were found when the model was loaded.

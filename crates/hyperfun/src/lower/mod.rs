@@ -6,12 +6,15 @@
 //! mode. Models whose control flow depends on the point evaluate through the
 //! per-point fallback (same executor, constant inputs) wrapped as a `Field`.
 
+mod census;
 mod errors;
 mod exec;
 mod fallback;
 pub mod ops;
+mod prune;
 mod usage;
 
+pub use census::ErrorCensus;
 pub use errors::{ErrorTable, RuntimeError};
 pub use usage::calls_of;
 
@@ -31,7 +34,8 @@ pub struct Model {
     pub object: String,
     /// Names of all objects in the file, in order.
     pub objects: Vec<String>,
-    /// The value F (inside where F >= 0).
+    /// The value F (inside where F >= 0); NaN where the model raises a
+    /// run-time error (see `error`), which every consumer treats as outside.
     pub value: Expr,
     /// Error code: 0, or a code resolved by `errors`.
     pub error: Expr,
@@ -123,11 +127,14 @@ pub fn lower(
         lowered: true,
     };
     match ex.run(obj, inputs) {
-        Ok(value) => Ok(Model {
-            value,
-            error: ex.err,
-            ..base
-        }),
+        Ok(value) => {
+            let error = prune::error_code(&ex.sites);
+            Ok(Model {
+                value: guard(value, &error),
+                error,
+                ..base
+            })
+        }
         Err(Stop::Static(message, pos)) => Err(LowerError { message, pos }),
         Err(Stop::NeedsPoint) => {
             let interp = Arc::new(fallback::Interp {
@@ -151,6 +158,14 @@ pub fn lower(
             })
         }
     }
+}
+
+/// The value where no run-time error is raised, NaN where one is: every
+/// consumer (mesher, slicer, renderer) treats NaN as outside, so a point
+/// with an error is never part of the solid. Folds away when `error` is the
+/// constant 0.
+fn guard(value: Expr, error: &Expr) -> Expr {
+    Expr::select(error.clone(), Expr::constant(f64::NAN), value)
 }
 
 impl Model {
