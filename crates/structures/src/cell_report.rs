@@ -2,7 +2,8 @@
 //! opposite faces are sampled on an `n x n` grid and compared.
 //!
 //! - geometric connectivity: the zero sets agree, tested as sign agreement
-//!   (`f >= 0` on both faces or on neither) at every sample;
+//!   (`f >= 0` on both faces or on neither, or values within `tol`) at every
+//!   sample;
 //! - full connectivity: the values agree within `tol`, so the sawtooth wave
 //!   gives a continuous (C0) field;
 //! - symmetry about the centre on an axis: `f(c + d) = f(c - d)` within `tol`
@@ -115,7 +116,10 @@ pub fn cell_report(
                 let lo = eval(p)?;
                 p[axis] = max[axis];
                 let hi = eval(p)?;
-                rep.geometric &= (lo >= 0.0) == (hi >= 0.0);
+                // Values within the tolerance agree even across the sign
+                // (a boundary through the sample on both faces), so full
+                // connectivity always implies geometric connectivity.
+                rep.geometric &= (lo >= 0.0) == (hi >= 0.0) || (lo - hi).abs() <= tol;
                 rep.max_face_diff = rep.max_face_diff.max((lo - hi).abs());
                 // Mirror pairs through the whole box: c + d and c - d.
                 for c in 0..n / 2 {

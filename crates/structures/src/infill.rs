@@ -28,11 +28,11 @@ pub fn depth(f: &Expr, mode: Depth) -> Expr {
 pub fn graded_by_depth(
     f: &Expr,
     mode: Depth,
-    d: f64,
+    d: impl Into<Expr>,
     at_surface: impl Into<Expr>,
     at_depth: impl Into<Expr>,
 ) -> Expr {
-    let t = (depth(f, mode) / d).max(0.0).min(1.0);
+    let t = (depth(f, mode) / d.into()).max(0.0).min(1.0);
     let (a, b) = (at_surface.into(), at_depth.into());
     &a + (b - &a) * t
 }
@@ -51,12 +51,13 @@ pub fn shell_with_infill(
     f: &Expr,
     l_o: impl Into<Expr>,
     lattice: &Expr,
-    alpha: f64,
+    alpha: impl Into<Expr>,
     join: &Join,
 ) -> Expr {
+    let alpha = alpha.into();
     let inner = f - l_o.into();
-    let shell = subtraction(f, &inner, alpha);
-    let infill = intersection(lattice, f, alpha);
+    let shell = subtraction(f, &inner, &alpha);
+    let infill = intersection(lattice, f, &alpha);
     match join {
         Join::Plain => union(&shell, &infill, alpha),
         Join::Blended(b) => blend_union(&shell, &infill, b, alpha),

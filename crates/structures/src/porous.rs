@@ -42,6 +42,6 @@ pub fn pores(p: &P3, map: &PeriodicMap, pore: impl Fn(&P3) -> Expr) -> Expr {
 }
 
 /// The porous part `F \ F_r`.
-pub fn porous(part: &Expr, pores: &Expr, alpha: f64) -> Expr {
+pub fn porous(part: &Expr, pores: &Expr, alpha: impl Into<Expr>) -> Expr {
     subtraction(part, pores, alpha)
 }

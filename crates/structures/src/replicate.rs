@@ -40,7 +40,7 @@ impl Kind {
 
 impl Wave {
     /// The mapped coordinate inside `[min, max]`.
-    fn map(&self, t: &Expr, min: f64, max: f64) -> Expr {
+    fn map(&self, t: &Expr, min: &Expr, max: &Expr) -> Expr {
         let g = match self {
             Wave::Sawtooth(a) => sawtooth(t, a.clone()),
             Wave::Triangle(a) => triangle(t, a.clone()),
@@ -54,7 +54,13 @@ impl Wave {
 /// The point mapped into the cell box `[min, max]`:
 /// `min_i + g_i(p_i) (max_i - min_i)`. Remap a cell with it to replicate.
 pub fn replicate(p: &P3, waves: &[Wave; 3], min: [f64; 3], max: [f64; 3]) -> P3 {
-    std::array::from_fn(|i| waves[i].map(&p[i], min[i], max[i]))
+    replicate_box(p, waves, &min.map(Expr::constant), &max.map(Expr::constant))
+}
+
+/// [`replicate`] with the cell box given as expressions (they may vary in
+/// space, which deforms the cells).
+pub fn replicate_box(p: &P3, waves: &[Wave; 3], min: &P3, max: &P3) -> P3 {
+    std::array::from_fn(|i| waves[i].map(&p[i], &min[i], &max[i]))
 }
 
 /// Any cell (itself possibly a cellular structure with further set

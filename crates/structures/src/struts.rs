@@ -172,8 +172,15 @@ pub fn strut_cell(kind: StrutLattice, q: &P3, r: impl Into<Expr>) -> Expr {
 
 /// The lattice through space with cubic cells of size `cell` and strut
 /// radius `r` in length units (may be a field of the point).
-pub fn strut_lattice(kind: StrutLattice, p: &P3, cell: f64, r: impl Into<Expr>) -> Expr {
-    let waves = std::array::from_fn(|_| Wave::Sawtooth(Expr::constant(cell)));
+/// `cell` may be a field too (a variable period).
+pub fn strut_lattice(
+    kind: StrutLattice,
+    p: &P3,
+    cell: impl Into<Expr>,
+    r: impl Into<Expr>,
+) -> Expr {
+    let cell = cell.into();
+    let waves = std::array::from_fn(|_| Wave::Sawtooth(cell.clone()));
     let q = replicate(p, &waves, [0.0; 3], [1.0; 3]);
-    strut_cell(kind, &q, r.into() / cell) * cell
+    strut_cell(kind, &q, r.into() / &cell) * cell
 }

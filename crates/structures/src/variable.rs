@@ -10,8 +10,9 @@ use microfrep_core::frep::morph;
 use microfrep_core::Expr;
 
 /// `(t - a) / (b - a)` clamped to [0, 1]: 0 at `a`, 1 at `b`.
-pub fn ramp(t: &Expr, a: f64, b: f64) -> Expr {
-    ((t - a) / (b - a)).max(0.0).min(1.0)
+pub fn ramp(t: &Expr, a: impl Into<Expr>, b: impl Into<Expr>) -> Expr {
+    let a = a.into();
+    ((t - &a) / (b.into() - &a)).max(0.0).min(1.0)
 }
 
 /// Metamorphosis `from (1 - t) + to t` with `t` clamped to [0, 1]; Algorithm 2

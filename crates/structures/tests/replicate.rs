@@ -55,6 +55,17 @@ fn geometric_but_not_full_connectivity() {
 }
 
 #[test]
+fn values_within_tolerance_count_as_connected() {
+    // A plane through the x faces' centres, tilted by 1e-12 along x: signs
+    // differ on the faces but the values agree within the tolerance.
+    let cell = Expr::y() + Expr::x() * 1e-12;
+    let r = cell_report(&cell, MIN, MAX, 9, 1e-9).unwrap();
+    assert!(r.axes[0].full && r.axes[0].geometric, "{r:?}");
+    let r = cell_report(&cell, MIN, MAX, 9, 0.0).unwrap();
+    assert!(!r.axes[0].full && !r.axes[0].geometric, "{r:?}");
+}
+
+#[test]
 fn report_rejects_bad_input() {
     let c = cylinders();
     assert!(matches!(
