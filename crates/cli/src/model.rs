@@ -50,6 +50,8 @@ pub fn load_with(spec: &str, opts: &Options) -> Result<Model> {
 }
 
 fn load_hf(path: &str, opts: &Options) -> Result<Model> {
+    // The mf* microstructure functions join the HyperFun library.
+    microfrep_structures_hf::install();
     let src = std::fs::read_to_string(path).with_context(|| format!("reading {path}"))?;
     let program = microfrep_hyperfun::parse(&src, path).map_err(|d| anyhow!("{d}"))?;
     let mut params = Vec::new();

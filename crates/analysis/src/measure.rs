@@ -1,0 +1,440 @@
+//! Volume and surface area of a model from its field, brick by brick.
+//!
+//! Bricks of [`BRICK`] voxels that interval evaluation proves full or empty
+//! count exactly. The others are sampled at the voxel corners with the batch
+//! evaluator; each voxel is split into six tetrahedra (Kuhn split along the
+//! main diagonal) and the volume of `{f >= 0}` and the area of `{f = 0}` are
+//! taken exactly for the linear interpolant on each: planes are exact,
+//! smooth curved surfaces are off by O(h^2).
+//!
+//! Creases (min/max and R-function edges, where the interpolant cuts
+//! corners, an O(h) error) are found by comparing each surface cell's centre
+//! value and corners with their best linear fit; those cells, and every
+//! cell with a sign change inside them, are halved up to [`MAX_DEPTH`]
+//! times. A first, unrefined pass counts the creased cells so that one
+//! depth, as deep as a work budget allows, is used for the whole grid.
+//!
+//! The same samples on every other node give the measures on voxels twice
+//! as large; the difference gives the error estimate (see
+//! [`Estimate::error`]).
+
+use crate::area::iso_polygon;
+use crate::crease::{creased, no_nan, sample_centers, split};
+use crate::grid::{classify_box, Class, Grid, Progress};
+use crate::volume::{tet_fraction, Estimate};
+use microfrep_core::{BatchEval, IntervalEval, Tape};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Voxels per side of a brick (even, so that coarse voxels tile it).
+pub const BRICK: usize = 16;
+
+/// Volume and area measures of a model in a grid's box (or in a region).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Measures {
+    /// Volume of the solid (inside the region, if any).
+    pub volume: Estimate,
+    /// Volume of the region (the box's volume without one).
+    pub region_volume: Estimate,
+    /// Area of the model's zero set inside the box (and the region).
+    pub area: Estimate,
+    /// Volume of the bricks proven full or empty by intervals, exact.
+    pub proven_volume: f64,
+    /// Bricks sampled, of all.
+    pub sampled_bricks: usize,
+    /// Halvings of the cells around creases (see [`MAX_DEPTH`]).
+    pub refine_depth: u32,
+    /// Voxels (and coarse voxels) found creased or sharply curved, which
+    /// were refined.
+    pub creased_cells: usize,
+    pub bricks: usize,
+}
+
+/// The six tetrahedra of the Kuhn split: corners as bit masks (bit a set =
+/// far side on axis a), each a path from corner 0 to corner 7.
+const TETS: [[usize; 4]; 6] = [
+    [0, 1, 3, 7],
+    [0, 1, 5, 7],
+    [0, 2, 3, 7],
+    [0, 2, 6, 7],
+    [0, 4, 5, 7],
+    [0, 4, 6, 7],
+];
+
+pub(crate) struct Scratch<'t> {
+    pub(crate) solid_iv: IntervalEval<'t>,
+    pub(crate) region_iv: Option<IntervalEval<'t>>,
+    pub(crate) solid_ev: BatchEval<'t>,
+    pub(crate) region_ev: Option<BatchEval<'t>>,
+    pub(crate) xs: Vec<f32>,
+    pub(crate) ys: Vec<f32>,
+    pub(crate) zs: Vec<f32>,
+    pub(crate) f: Vec<f32>,
+    pub(crate) r: Vec<f32>,
+}
+
+/// Measures the solid `f >= 0` (inside `region >= 0` when given) on `grid`.
+/// `progress(done, total)` counts bricks.
+pub fn measure(solid: &Tape, region: Option<&Tape>, grid: &Grid, progress: Progress) -> Measures {
+    let nb = grid.dims.map(|d| d.div_ceil(BRICK));
+    let total = nb[0] * nb[1] * nb[2];
+    // First pass: measure the bricks without creased cells, count the
+    // creased cells of the others; then measure those at the deepest depth
+    // the budget allows (one depth for the whole grid keeps the fine and
+    // coarse estimates comparable).
+    let all: Vec<usize> = (0..total).collect();
+    let first = pass(solid, region, grid, 0, true, &all, &|d, _| {
+        progress(d, 2 * total)
+    });
+    let creased: usize = first.iter().map(|p| p.creased).sum();
+    let nodes: usize = first.iter().map(|p| p.nodes).sum();
+    let budget = REFINE_BUDGET * nodes as f64;
+    let mut depth = 0;
+    let mut cost = 0.0;
+    for d in (1..=MAX_DEPTH).filter(|_| creased > 0) {
+        // Each halving level below a creased cell splits up to 4^(d-1)
+        // cells (a surface through it).
+        cost += SPLIT_POINTS * 4f64.powi(d as i32 - 1) * creased as f64;
+        if cost > budget {
+            break;
+        }
+        depth = d;
+    }
+    // Bricks without creased cells measure the same at any depth.
+    let redo: Vec<usize> = (0..total).filter(|&b| first[b].creased > 0).collect();
+    let mut parts = first;
+    let again = pass(solid, region, grid, depth, false, &redo, &|d, _| {
+        progress(total + d, 2 * total)
+    });
+    for (&b, p) in redo.iter().zip(again) {
+        parts[b] = p;
+    }
+    progress(2 * total, 2 * total);
+    let mut m = Measures {
+        bricks: total,
+        refine_depth: depth,
+        creased_cells: creased,
+        ..Measures::default()
+    };
+    for p in &parts {
+        m.volume.add(p.volume);
+        m.region_volume.add(p.region);
+        m.area.add(p.area);
+        if p.sampled {
+            m.sampled_bricks += 1;
+        } else {
+            m.proven_volume += p.region.value;
+        }
+    }
+    m
+}
+
+/// Measures the bricks `which` with creased cells halved `depth` times.
+fn pass(
+    solid: &Tape,
+    region: Option<&Tape>,
+    grid: &Grid,
+    depth: u32,
+    survey: bool,
+    which: &[usize],
+    progress: Progress,
+) -> Vec<Part> {
+    let nb = grid.dims.map(|d| d.div_ceil(BRICK));
+    let total = which.len();
+    let done = AtomicUsize::new(0);
+    which
+        .par_iter()
+        .map_init(
+            || Scratch {
+                solid_iv: IntervalEval::new(solid),
+                region_iv: region.map(IntervalEval::new),
+                solid_ev: BatchEval::new(solid),
+                region_ev: region.map(BatchEval::new),
+                xs: Vec::new(),
+                ys: Vec::new(),
+                zs: Vec::new(),
+                f: Vec::new(),
+                r: Vec::new(),
+            },
+            |s, &b| {
+                let bi = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
+                let lo = bi.map(|v| v * BRICK);
+                let hi: [usize; 3] = std::array::from_fn(|a| (lo[a] + BRICK).min(grid.dims[a]));
+                let part = brick(grid, s, lo, hi, depth, survey);
+                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if d & 63 == 0 {
+                    progress(d, total);
+                }
+                part
+            },
+        )
+        .collect()
+}
+
+#[derive(Default)]
+struct Part {
+    volume: Estimate,
+    region: Estimate,
+    area: Estimate,
+    sampled: bool,
+    /// Top-level cells found creased, and points sampled.
+    creased: usize,
+    nodes: usize,
+}
+
+/// Measures of the voxels `lo..hi`.
+/// With `survey`, bricks with creased cells are only counted (their
+/// measures are left for a second pass); the others are measured.
+fn brick(
+    g: &Grid,
+    s: &mut Scratch,
+    lo: [usize; 3],
+    hi: [usize; 3],
+    max_depth: u32,
+    survey: bool,
+) -> Part {
+    let p0 = g.node(lo);
+    let p1 = g.node(hi);
+    let bv: f64 = (0..3).map(|a| p1[a] - p0[a]).product();
+    let region = match &mut s.region_iv {
+        Some(ev) => classify_box(ev, p0, p1),
+        None => Class::Full,
+    };
+    if region == Class::Empty {
+        return Part::default();
+    }
+    let solid = classify_box(&mut s.solid_iv, p0, p1);
+    if region == Class::Full && solid != Class::Mixed {
+        let v = if solid == Class::Full { bv } else { 0.0 };
+        return Part {
+            volume: Estimate::exact(v),
+            region: Estimate::exact(bv),
+            ..Part::default()
+        };
+    }
+    // Sample the (n+1)^3 nodes.
+    let nn: [usize; 3] = std::array::from_fn(|a| hi[a] - lo[a] + 1);
+    s.xs.clear();
+    s.ys.clear();
+    s.zs.clear();
+    for k in 0..nn[2] {
+        for j in 0..nn[1] {
+            for i in 0..nn[0] {
+                let p = g.node([lo[0] + i, lo[1] + j, lo[2] + k]);
+                s.xs.push(p[0] as f32);
+                s.ys.push(p[1] as f32);
+                s.zs.push(p[2] as f32);
+            }
+        }
+    }
+    let len = s.xs.len();
+    s.f.resize(len, 0.0);
+    s.r.resize(len, 1.0);
+    match solid {
+        Class::Mixed => s.solid_ev.eval(&s.xs, &s.ys, &s.zs, &mut s.f),
+        Class::Full => s.f.fill(f32::INFINITY),
+        Class::Empty => s.f.fill(f32::NEG_INFINITY),
+    }
+    match (&mut s.region_ev, region) {
+        (Some(ev), Class::Mixed) => ev.eval(&s.xs, &s.ys, &s.zs, &mut s.r),
+        _ => s.r.fill(f32::INFINITY),
+    }
+    no_nan(&mut s.f);
+    no_nan(&mut s.r);
+    let mut ctx = Ctx {
+        s,
+        with_region: region == Class::Mixed,
+        eval_solid: solid == Class::Mixed,
+        solid_const: if solid == Class::Full {
+            f32::INFINITY
+        } else {
+            f32::NEG_INFINITY
+        },
+        max_depth,
+        creased: 0,
+        refined: false,
+        survey,
+    };
+    let n: [usize; 3] = std::array::from_fn(|a| hi[a] - lo[a] + 1);
+    let centers = sample_centers(g, &mut ctx, lo, n);
+    let mut part = cells(g, &mut ctx, lo, n, &centers);
+    if survey && ctx.creased == 0 {
+        ctx.survey = false;
+        part = cells(g, &mut ctx, lo, n, &centers);
+    }
+    part.creased = ctx.creased;
+    part.nodes = len;
+    part
+}
+
+/// Measures of the sampled brick's cells (node counts `n`), each coarse cell
+/// with its eight fine cells; `centers` from
+/// [`crate::crease::sample_centers`].
+fn cells(g: &Grid, ctx: &mut Ctx, lo: [usize; 3], n: [usize; 3], centers: &[[f64; 2]]) -> Part {
+    let mut part = Part {
+        sampled: true,
+        ..Part::default()
+    };
+    let idx = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let h = g.step;
+    let h2 = h.map(|v| 2.0 * v);
+    let slot = |i: usize, j: usize, k: usize, step: usize| {
+        let fine = (n[0] - 1) * (n[1] - 1) * (n[2] - 1);
+        if step == 1 {
+            i + (n[0] - 1) * (j + (n[1] - 1) * k)
+        } else {
+            fine + i / 2 + (n[0] / 2) * (j / 2 + (n[1] / 2) * (k / 2))
+        }
+    };
+    for k in (0..n[2] - 1).step_by(2) {
+        for j in (0..n[1] - 1).step_by(2) {
+            for i in (0..n[0] - 1).step_by(2) {
+                let corners = |s: &Scratch, i: usize, j: usize, k: usize, step: usize| {
+                    let at = |c: usize| {
+                        idx(
+                            i + step * (c & 1),
+                            j + step * ((c >> 1) & 1),
+                            k + step * ((c >> 2) & 1),
+                        )
+                    };
+                    let f: [f64; 8] = std::array::from_fn(|c| s.f[at(c)] as f64);
+                    let r: [f64; 8] = std::array::from_fn(|c| s.r[at(c)] as f64);
+                    (f, r)
+                };
+                let origin = g.node([lo[0] + i, lo[1] + j, lo[2] + k]);
+                let (f, r) = corners(ctx.s, i, j, k, 2);
+                ctx.refined = false;
+                let c = centers[slot(i, j, k, 2)];
+                let coarse = cell(ctx, origin, h2, &f, &r, c, 0);
+                let mut fine = [0.0; 3];
+                for c in 0..8 {
+                    let o = [c & 1, (c >> 1) & 1, (c >> 2) & 1];
+                    let (f, r) = corners(ctx.s, i + o[0], j + o[1], k + o[2], 1);
+                    let p: [f64; 3] = std::array::from_fn(|a| origin[a] + h[a] * o[a] as f64);
+                    let c = centers[slot(i + o[0], j + o[1], k + o[2], 1)];
+                    let m = cell(ctx, p, h, &f, &r, c, 0);
+                    for q in 0..3 {
+                        fine[q] += m[q];
+                    }
+                }
+                for (q, e) in [&mut part.volume, &mut part.region, &mut part.area]
+                    .into_iter()
+                    .enumerate()
+                {
+                    e.value += fine[q];
+                    e.coarse += coarse[q];
+                    if ctx.refined {
+                        e.kink_diff += fine[q] - coarse[q];
+                    }
+                }
+            }
+        }
+    }
+    part
+}
+
+/// Most halvings of a creased cell.
+pub const MAX_DEPTH: u32 = 4;
+/// Refinement may evaluate about this many times the points of the
+/// sampled bricks; the depth is lowered until it fits (models with creases
+/// or unresolved detail everywhere get less refinement, and larger error
+/// estimates).
+const REFINE_BUDGET: f64 = 8.0;
+
+pub(crate) struct Ctx<'a, 't> {
+    pub(crate) s: &'a mut Scratch<'t>,
+    pub(crate) with_region: bool,
+    pub(crate) eval_solid: bool,
+    /// The solid's value where it is not evaluated (proven full or empty):
+    /// infinite, so that `min(solid, region)` is the region's value or
+    /// empty. Likewise the region is `+inf` where it is not evaluated.
+    pub(crate) solid_const: f32,
+    /// Halvings of creased cells (and of every cell with a sign change
+    /// inside them).
+    pub(crate) max_depth: u32,
+    /// Cells found creased at the top level.
+    pub(crate) creased: usize,
+    /// Whether the current coarse cell was refined anywhere.
+    pub(crate) refined: bool,
+    /// Only count creased cells, measure nothing.
+    pub(crate) survey: bool,
+}
+
+/// Points evaluated per halving of a cell (27 nodes, 8 centres).
+pub(crate) const SPLIT_POINTS: f64 = 35.0;
+
+/// Solid volume, region volume and area of the cell at `p0` with sides `h`
+/// and corner values `f` (solid) and `r` (region); creased cells are halved
+/// (and `ctx.refined` set) up to `ctx.max_depth` times.
+pub(crate) fn cell(
+    ctx: &mut Ctx,
+    p0: [f64; 3],
+    h: [f64; 3],
+    f: &[f64; 8],
+    r: &[f64; 8],
+    center: [f64; 2],
+    depth: u32,
+) -> [f64; 3] {
+    let m: [f64; 8] = std::array::from_fn(|c| f[c].min(r[c]));
+    let inside = |v: &[f64; 8]| v.iter().filter(|&&x| x >= 0.0).count();
+    let (nm, nf, nr) = (inside(&m), inside(f), inside(r));
+    let mixed = |n: usize| n != 0 && n != 8;
+    let cv = h[0] * h[1] * h[2];
+    if !mixed(nm) && !mixed(nr) && !mixed(nf) {
+        return [cv * (nm / 8) as f64, cv * (nr / 8) as f64, 0.0];
+    }
+    let split_here = depth > 0
+        || (mixed(nf) && creased(f, center[0]))
+        || (mixed(nr) && creased(r, center[1]))
+        || (mixed(nm) && creased(&m, center[0].min(center[1])));
+    if split_here && depth == 0 {
+        ctx.creased += 1;
+    }
+    if ctx.survey {
+        return [0.0; 3];
+    }
+    if split_here && depth < ctx.max_depth {
+        ctx.refined = true;
+        return split(ctx, p0, h, f, r, depth);
+    }
+    let corner: [[f64; 3]; 8] =
+        std::array::from_fn(|c| std::array::from_fn(|a| h[a] * ((c >> a) & 1) as f64));
+    if !ctx.with_region {
+        // The region is +inf: the solid's polygons give volume and area.
+        let (mut frac, mut area) = (0.0, 0.0);
+        for t in TETS {
+            let poly = iso_polygon(t.map(|c| f[c]));
+            frac += poly.inside_fraction();
+            area += poly.area(&t.map(|c| corner[c]));
+        }
+        return [cv * frac / 6.0, cv, area];
+    }
+    let vol = cv * frac(&m, nm);
+    let rvol = cv * frac(r, nr);
+    let mut area = 0.0;
+    if mixed(nf) && nr != 0 {
+        for t in TETS {
+            let poly = iso_polygon(t.map(|c| f[c]));
+            if poly.n == 0 || poly.mean_of(t.map(|c| r[c])) < 0.0 {
+                continue;
+            }
+            area += poly.area(&t.map(|c| corner[c]));
+        }
+    }
+    [vol, rvol, area]
+}
+
+/// Fraction of a cell where the interpolant of the corner values `v` (of
+/// which `inside` are `>= 0`) is `>= 0`, over its six tetrahedra.
+fn frac(v: &[f64; 8], inside: usize) -> f64 {
+    match inside {
+        0 => 0.0,
+        8 => 1.0,
+        _ => {
+            TETS.iter()
+                .map(|t| tet_fraction(t.map(|c| v[c])))
+                .sum::<f64>()
+                / 6.0
+        }
+    }
+}

@@ -1,0 +1,193 @@
+//! The whole analysis of a model in one call: volume, area, connectivity
+//! and thickness on one grid, with the accuracy of each figure.
+
+use crate::connectivity::{self, connectivity, Connectivity};
+use crate::error::{AnalysisError, Result};
+use crate::grid::{Grid, Sampler};
+use crate::measure::{measure, Measures};
+use crate::thickness::{thickness, Thickness, ThicknessOptions};
+use microfrep_core::Tape;
+use std::time::Instant;
+
+/// What to compute, and within which memory.
+#[derive(Clone, Debug)]
+pub struct AnalyzeOptions {
+    pub connectivity: bool,
+    pub thickness: bool,
+    pub thickness_options: ThicknessOptions,
+    /// Most bytes the voxel stages may use; jobs predicted to need more are
+    /// refused before they start.
+    pub memory_limit: u64,
+}
+
+impl Default for AnalyzeOptions {
+    fn default() -> Self {
+        AnalyzeOptions {
+            connectivity: true,
+            thickness: true,
+            thickness_options: ThicknessOptions::default(),
+            memory_limit: 4 << 30,
+        }
+    }
+}
+
+/// The stage a progress report is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Volume and area, counted in bricks.
+    Measure,
+    /// Component labelling, counted in voxel layers.
+    Connectivity,
+    /// Local thickness, in the thickness module's units.
+    Thickness,
+}
+
+impl Stage {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Measure => "volume and area",
+            Stage::Connectivity => "connectivity",
+            Stage::Thickness => "thickness",
+        }
+    }
+}
+
+/// Results of [`analyze`].
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub grid: Grid,
+    /// Whether the figures are inside a region model (else the bounds).
+    pub region: bool,
+    pub measures: Measures,
+    pub connectivity: Option<Connectivity>,
+    pub thickness: Option<Thickness>,
+    /// Wall-clock seconds of the measure, connectivity and thickness stages.
+    pub seconds: [f64; 3],
+}
+
+impl Report {
+    /// Solid volume (inside the region, if any).
+    pub fn volume(&self) -> f64 {
+        self.measures.volume.value
+    }
+
+    pub fn volume_error(&self) -> f64 {
+        self.measures.volume.error()
+    }
+
+    /// Volume of the region, or of the bounds.
+    pub fn region_volume(&self) -> f64 {
+        self.measures.region_volume.value
+    }
+
+    pub fn region_volume_error(&self) -> f64 {
+        self.measures.region_volume.error()
+    }
+
+    /// Solid volume over region volume (relative density).
+    pub fn volume_fraction(&self) -> f64 {
+        let r = self.region_volume();
+        if r > 0.0 {
+            self.volume() / r
+        } else {
+            0.0
+        }
+    }
+
+    pub fn volume_fraction_error(&self) -> f64 {
+        let r = self.region_volume();
+        if r > 0.0 {
+            (self.volume_error() + self.volume_fraction() * self.region_volume_error()) / r
+        } else {
+            0.0
+        }
+    }
+
+    /// `1 - volume_fraction`.
+    pub fn porosity(&self) -> f64 {
+        1.0 - self.volume_fraction()
+    }
+
+    /// Area of the solid's surface `f = 0` inside the bounds (and region);
+    /// faces cut by the bounds or the region are not counted.
+    pub fn area(&self) -> f64 {
+        self.measures.area.value
+    }
+
+    pub fn area_error(&self) -> f64 {
+        self.measures.area.error()
+    }
+
+    /// Area over solid volume.
+    pub fn specific_surface(&self) -> f64 {
+        if self.volume() > 0.0 {
+            self.area() / self.volume()
+        } else {
+            0.0
+        }
+    }
+
+    pub fn specific_surface_error(&self) -> f64 {
+        let (a, v) = (self.area(), self.volume());
+        if a > 0.0 && v > 0.0 {
+            self.specific_surface() * (self.area_error() / a + self.volume_error() / v)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Analyses the solid `f >= 0` of `solid` (inside `region >= 0` when given)
+/// on `grid`. `progress(stage, done, total)`.
+pub fn analyze(
+    solid: &Tape,
+    region: Option<&Tape>,
+    grid: Grid,
+    opts: &AnalyzeOptions,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<Report> {
+    let sampler = Sampler::new(solid, region, grid.clone());
+    if opts.connectivity {
+        let need = connectivity::predict_bytes(&sampler);
+        if need > opts.memory_limit as f64 {
+            return Err(AnalysisError::Memory(format!(
+                "connectivity on a grid of {:?} voxels needs about {:.0} MiB, over the limit \
+                 of {:.0} MiB; lower the resolution",
+                grid.dims,
+                need / MIB,
+                opts.memory_limit as f64 / MIB
+            )));
+        }
+    }
+    let t = Instant::now();
+    let measures = measure(solid, region, &grid, &|d, n| progress(Stage::Measure, d, n));
+    let mut seconds = [t.elapsed().as_secs_f64(), 0.0, 0.0];
+    let connectivity = if opts.connectivity {
+        let t = Instant::now();
+        let c = connectivity(&sampler, &|d, n| progress(Stage::Connectivity, d, n))?;
+        seconds[1] = t.elapsed().as_secs_f64();
+        Some(c)
+    } else {
+        None
+    };
+    let thickness = if opts.thickness {
+        let t = Instant::now();
+        let mut topts = opts.thickness_options.clone();
+        topts.memory_limit = topts.memory_limit.min(opts.memory_limit);
+        let th = thickness(&sampler, &topts, &|d, n| progress(Stage::Thickness, d, n))?;
+        seconds[2] = t.elapsed().as_secs_f64();
+        Some(th)
+    } else {
+        None
+    };
+    Ok(Report {
+        grid,
+        region: region.is_some(),
+        measures,
+        connectivity,
+        thickness,
+        seconds,
+    })
+}
+
+const MIB: f64 = 1024.0 * 1024.0;
