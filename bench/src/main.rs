@@ -2,14 +2,20 @@
 //! `RESULT <case> key=value ...` lines. To add a suite: a module, an arm in
 //! `main`'s match and a line in `SUITES`.
 
+mod analyze;
 mod eval;
 mod hyperfun;
 mod mesh;
 mod slice;
+mod structures;
 mod to_fidget;
 
 /// Suite names and what they measure, for the usage message.
 const SUITES: &[(&str, &str)] = &[
+    (
+        "analyze",
+        "local thickness (pore, solid) of the tori-ball block at 256^3 vs PoreSpy",
+    ),
     (
         "eval",
         "single-thread batch evaluation vs the fidget crate's VM and JIT",
@@ -21,6 +27,10 @@ const SUITES: &[(&str, &str)] = &[
     (
         "hyperfun",
         "HyperFun models (gyroid, tori-ball) lowered vs the same expressions via the Rust API",
+    ),
+    (
+        "structures",
+        "volume fractions achieved vs targets via the mf* HyperFun library, density-table cost",
     ),
     (
         "slice",
@@ -39,10 +49,12 @@ fn usage() -> String {
 fn main() {
     let name = std::env::args().nth(1).unwrap_or_default();
     let result = match name.as_str() {
+        "analyze" => analyze::run(),
         "eval" => eval::run(),
         "mesh" => mesh::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
+        "structures" => structures::run(),
         "" => Err(usage()),
         other => Err(format!("unknown suite '{other}'\n{}", usage())),
     };

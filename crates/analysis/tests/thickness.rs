@@ -120,6 +120,40 @@ fn local_thickness_matches_definition_on_random_grids() {
     }
 }
 
+#[test]
+fn local_thickness_matches_definition_on_a_blob_grid() {
+    // Larger than the random grids (several tiles of rows and 64-bit
+    // words per row): overlapping balls, both phases, brute force.
+    let dims = [70, 19, 9];
+    let mut rng = Rng(7);
+    let balls: Vec<([f64; 3], f64)> = (0..25)
+        .map(|_| {
+            let c = dims.map(|d| rng.below(d as u64) as f64);
+            (c, 1.0 + rng.below(400) as f64 / 100.0)
+        })
+        .collect();
+    let labels: Vec<u8> = (0..dims.iter().product())
+        .map(|i| {
+            let p = coords(i, dims).map(|v| v as f64);
+            let inside = balls
+                .iter()
+                .any(|(c, r)| (0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f64>() < r * r);
+            if inside {
+                SOLID
+            } else {
+                PORE
+            }
+        })
+        .collect();
+    for phase in [SOLID, PORE] {
+        assert_eq!(
+            local_thickness_field(&labels, dims, phase).unwrap(),
+            brute_local_thickness(&labels, dims, phase),
+            "phase {phase}"
+        );
+    }
+}
+
 /// Solid balls of radius 1.5..4 voxels at random in a 32 x 32 x 64 grid,
 /// plus walls every 12 voxels so the pores stay small too.
 fn small_features() -> ([usize; 3], Vec<u8>) {

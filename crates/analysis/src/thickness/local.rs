@@ -149,7 +149,7 @@ impl Reach {
 }
 
 /// The ridge centres whose planes are in `zs`, sorted largest ball first
-/// (ties by position), ranked by distinct squared radius. `d` is the
+/// (ties in scan order), ranked by distinct squared radius. `d` is the
 /// squared distance map of the window `dims` (0 outside the phase).
 pub fn ridge(d: &[u32], dims: [usize; 3], zs: Range<usize>) -> Vec<Ball> {
     let [nx, ny, nz] = dims;
@@ -206,12 +206,10 @@ pub fn ridge(d: &[u32], dims: [usize; 3], zs: Range<usize>) -> Vec<Ball> {
             out
         })
         .collect();
-    balls.par_sort_unstable_by(|a, b| {
-        b.d.cmp(&a.d)
-            .then(a.at[2].cmp(&b.at[2]))
-            .then(a.at[1].cmp(&b.at[1]))
-            .then(a.at[0].cmp(&b.at[0]))
-    });
+    // Largest first; a stable sort keeps each radius's balls in scan order
+    // (z, y, x), which keeps the painting walk local. The order among equal
+    // radii cannot change the result: they paint the same value.
+    balls.par_sort_by_key(|b| std::cmp::Reverse(b.d));
     let mut rank = 0u32;
     for i in 0..balls.len() {
         if i > 0 && balls[i].d != balls[i - 1].d {
@@ -291,16 +289,23 @@ impl Template {
     }
 }
 
+/// Rows per tile of the summary bitmap.
+const TILE: usize = 8;
+
 /// Paints planes `zs` into `out` (their voxels only). Unpainted voxels are
 /// bits of a bitmap (one bit per voxel, rows padded to 64), small enough to
-/// stay in cache, so testing a ball's row costs a word or two.
+/// stay in cache, so testing a ball's row costs a word or two; a summary
+/// bitmap (the OR of every [`TILE`] rows of a plane) lets a ball pass over
+/// a tile of rows already painted with one test.
 fn paint_chunk(d: &[u32], dims: [usize; 3], zs: Range<usize>, balls: &[Ball], out: &mut [u32]) {
     let [nx, ny, _] = dims;
     let plane = nx * ny;
     let base = zs.start * plane;
     let wpr = nx.div_ceil(64);
     let rows = out.len() / nx;
+    let nyb = ny.div_ceil(TILE);
     let mut bits = vec![0u64; rows * wpr];
+    let mut sum = vec![0u64; zs.len() * nyb * wpr];
     for (r, w) in bits.chunks_mut(wpr).enumerate() {
         let row = &d[base + r * nx..base + (r + 1) * nx];
         let done = &out[r * nx..(r + 1) * nx];
@@ -308,6 +313,10 @@ fn paint_chunk(d: &[u32], dims: [usize; 3], zs: Range<usize>, balls: &[Ball], ou
             if v > 0 && o == 0 {
                 w[x / 64] |= 1 << (x % 64);
             }
+        }
+        let s = ((r / ny) * nyb + (r % ny) / TILE) * wpr;
+        for (s, &w) in sum[s..s + wpr].iter_mut().zip(w.iter()) {
+            *s |= w;
         }
     }
     let z0 = zs.start as i64;
@@ -325,44 +334,94 @@ fn paint_chunk(d: &[u32], dims: [usize; 3], zs: Range<usize>, balls: &[Ball], ou
         let zb = (cz + t.r).min(zs.end as i64 - 1);
         for z in za..=zb {
             let k = (z - cz + t.r) as usize;
-            let rz = (z - z0) as usize * ny;
-            for &(dy, rx) in &t.rows[t.starts[k]..t.starts[k + 1]] {
-                let y = cy + dy as i64;
-                if y < 0 || y >= ny as i64 {
+            let zl = (z - z0) as usize;
+            let spans = &t.rows[t.starts[k]..t.starts[k + 1]];
+            // Rows by tiles: skip a tile whose summary has no unpainted bit
+            // under the widest span of its rows.
+            let mut i = 0;
+            while i < spans.len() {
+                let y0 = cy + spans[i].0 as i64;
+                if y0 < 0 {
+                    i += 1;
                     continue;
                 }
-                let xa = (cx - rx as i64).max(0) as usize;
-                let xb = (cx + rx as i64).min(nx as i64 - 1) as usize;
-                let r = rz + y as usize;
-                fill_row(
-                    &mut bits[r * wpr..(r + 1) * wpr],
-                    &mut out[r * nx..(r + 1) * nx],
-                    xa,
-                    xb,
-                    b.rank + 1,
-                );
+                if y0 >= ny as i64 {
+                    break;
+                }
+                let tile = y0 as usize / TILE;
+                let y_end = ((tile + 1) * TILE).min(ny) as i64;
+                let mut j = i;
+                let mut widest = 0;
+                while j < spans.len() && cy + (spans[j].0 as i64) < y_end {
+                    widest = widest.max(spans[j].1);
+                    j += 1;
+                }
+                let xa = (cx - widest as i64).max(0) as usize;
+                let xb = (cx + widest as i64).min(nx as i64 - 1) as usize;
+                let srow = (zl * nyb + tile) * wpr;
+                if !any_in(&sum[srow..srow + wpr], xa, xb) {
+                    i = j;
+                    continue;
+                }
+                let mut hit = false;
+                for &(dy, rx) in &spans[i..j] {
+                    let y = (cy + dy as i64) as usize;
+                    let xa = (cx - rx as i64).max(0) as usize;
+                    let xb = (cx + rx as i64).min(nx as i64 - 1) as usize;
+                    let r = zl * ny + y;
+                    hit |= fill_row(
+                        &mut bits[r * wpr..(r + 1) * wpr],
+                        &mut out[r * nx..(r + 1) * nx],
+                        xa,
+                        xb,
+                        b.rank + 1,
+                    );
+                }
+                if hit {
+                    for w in xa / 64..=xb / 64 {
+                        let mut v = 0;
+                        for y in tile * TILE..y_end as usize {
+                            v |= bits[(zl * ny + y) * wpr + w];
+                        }
+                        sum[srow + w] = v;
+                    }
+                }
+                i = j;
             }
         }
     }
 }
 
+/// The mask of bits `a..=b` within word `w`.
+fn word_mask(w: usize, a: usize, b: usize) -> u64 {
+    let lo = if w == a / 64 { a % 64 } else { 0 };
+    let hi = if w == b / 64 { b % 64 } else { 63 };
+    (u64::MAX >> (63 - hi)) & (u64::MAX << lo)
+}
+
+/// Whether any of bits `a..=b` is set.
+fn any_in(bits: &[u64], a: usize, b: usize) -> bool {
+    (a / 64..=b / 64).any(|w| bits[w] & word_mask(w, a, b) != 0)
+}
+
 /// Writes `v` into the unpainted voxels `a..=b` of one row and marks them
-/// painted.
-fn fill_row(bits: &mut [u64], out: &mut [u32], a: usize, b: usize, v: u32) {
+/// painted; whether there were any.
+fn fill_row(bits: &mut [u64], out: &mut [u32], a: usize, b: usize, v: u32) -> bool {
+    let mut hit = false;
     for w in a / 64..=b / 64 {
-        let lo = if w == a / 64 { a % 64 } else { 0 };
-        let hi = if w == b / 64 { b % 64 } else { 63 };
-        let mask = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+        let mask = word_mask(w, a, b);
         let mut m = bits[w] & mask;
         if m == 0 {
             continue;
         }
+        hit = true;
         bits[w] &= !mask;
         while m != 0 {
             out[w * 64 + m.trailing_zeros() as usize] = v;
             m &= m - 1;
         }
     }
+    hit
 }
 
 #[cfg(test)]
