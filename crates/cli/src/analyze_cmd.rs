@@ -176,6 +176,8 @@ fn stats_json(s: &ThicknessStats) -> Value {
         "p90": s.p90,
         "max": s.max,
         "capped_voxels": s.capped_voxels,
+        "exact_up_to": s.exact_up_to,
+        "ladder_ratio": s.ladder_ratio,
         "histogram": { "edges": s.histogram.edges, "counts": s.histogram.counts },
     })
 }
@@ -258,10 +260,25 @@ fn print_text(a: &AnalyzeArgs, r: &Report) {
     if let Some(t) = &r.thickness {
         for (name, p) in [("thickness", &t.solid), ("pore size", &t.pore)] {
             match p {
-                PhaseThickness::Measured(s) => println!(
-                    "  {name:<11} mean {:.5}, median {:.5}, p10 {:.5}, p90 {:.5}, max {:.5}",
-                    s.mean, s.median, s.p10, s.p90, s.max
-                ),
+                PhaseThickness::Measured(s) => {
+                    println!(
+                        "  {name:<11} mean {:.5}, median {:.5}, p10 {:.5}, p90 {:.5}, max {:.5}",
+                        s.mean, s.median, s.p10, s.p90, s.max
+                    );
+                    if let Some(cut) = s.exact_up_to {
+                        println!(
+                            "  note        {name} above {cut:.5} is a lower bound \
+                             (radius ladder {:.1} % apart, to bound the work)",
+                            100.0 * (s.ladder_ratio - 1.0)
+                        );
+                    }
+                    if s.capped_voxels > 0 {
+                        println!(
+                            "  note        {} {name} voxels capped at the slab limit",
+                            s.capped_voxels
+                        );
+                    }
+                }
                 PhaseThickness::Unbounded { .. } => {
                     println!("  {name:<11} unbounded (the phase fills the grid)")
                 }
@@ -275,7 +292,7 @@ fn print_text(a: &AnalyzeArgs, r: &Report) {
     }
     println!(
         "  accuracy    ± are Richardson estimates (grid vs grid coarsened by 2); \
-         connectivity and thickness are exact on the voxel grid"
+         connectivity and thickness are exact on the voxel grid unless a note says otherwise"
     );
     let mut times = format!("{:.2} s volume/area", r.seconds[0]);
     if r.connectivity.is_some() {
