@@ -4,8 +4,7 @@ use crate::model;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use microfrep_core::Tape;
-use microfrep_mesh::write::{temp_path, write_mesh, Format};
+use microfrep_mesh::write::{stream_mesh, stream_temp_paths, write_mesh, Format};
 use microfrep_mesh::{bounds, check, memory, Grid, MeshOptions, Plan};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -34,10 +33,26 @@ pub struct MeshArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+    /// Write STL or PLY while meshing, never holding the whole mesh (done
+    /// anyway when the mesh would not fit in memory); skips the edge check.
+    #[arg(long)]
+    stream: bool,
 }
 
-/// The file being written, removed by the Ctrl-C handler.
-static PARTIAL: Mutex<Option<PathBuf>> = Mutex::new(None);
+/// The temporary files being written, removed by the Ctrl-C handler.
+static PARTIAL: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// What the summary reports; the edge check needs the whole mesh, so a
+/// streamed mesh has none.
+struct Summary {
+    triangles: u64,
+    vertices: u64,
+    bad_edges: Option<usize>,
+    euler: Option<i64>,
+    volume: f64,
+    area: f64,
+    bbox: [[f64; 3]; 2],
+}
 
 fn parse_bounds(s: &str) -> Result<[[f64; 3]; 2]> {
     let v: Vec<f64> = s
@@ -64,8 +79,7 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let m = model::load(&a.model)?;
     let b = match &a.bounds {
         Some(s) => parse_bounds(s)?,
-        None => bounds::model_bounds(&Tape::new(&m.expr))
-            .with_context(|| format!("model '{}'", a.model))?,
+        None => bounds::model_bounds_of(&m.expr).with_context(|| format!("model '{}'", a.model))?,
     };
     let resolution = match (a.resolution, a.voxel) {
         (Some(n), _) => n,
@@ -75,17 +89,41 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let plan = Plan::new(&m.expr, &MeshOptions::new(b, resolution))?;
 
     let est = memory::estimate(&plan);
-    if let Some(avail) = memory::available() {
-        if est.bytes > avail {
-            bail!(
-                "meshing at resolution {resolution} needs about {:.1} GiB but {:.1} GiB are \
-                 available; resolution {} would fit",
-                est.bytes / GIB,
-                avail / GIB,
-                memory::resolution_fitting(&est, resolution, avail)
-            );
-        }
+    let streamable = matches!(format, Format::Stl | Format::Ply);
+    let avail = memory::available();
+    let too_big = |bytes: f64| avail.is_some_and(|m| bytes > m);
+    // Meshes too large for memory go straight to disk (STL, PLY).
+    let stream = streamable && (a.stream || too_big(est.bytes));
+    let predicted = if stream {
+        memory::streaming_bytes(&plan, &est)
+    } else {
+        est.bytes
+    };
+    if let Some(m) = avail.filter(|&m| predicted > m) {
+        let hint = if streamable || stream {
+            String::new()
+        } else {
+            " (or write .stl or .ply, which are streamed to disk)".to_string()
+        };
+        bail!(
+            "meshing at resolution {resolution} needs about {:.1} GiB but {:.1} GiB are \
+             available; resolution {} would fit{hint}",
+            predicted / GIB,
+            m / GIB,
+            memory::resolution_fitting(&est, resolution, m)
+        );
     }
+
+    // From here on a Ctrl-C removes the partial output. Only the first
+    // handler of the process can be installed; an error here just means
+    // Ctrl-C falls back to the default (the temporary files stay).
+    *PARTIAL.lock().unwrap_or_else(|e| e.into_inner()) = stream_temp_paths(&a.output);
+    let _ = ctrlc::set_handler(|| {
+        for p in std::mem::take(&mut *PARTIAL.lock().unwrap_or_else(|e| e.into_inner())) {
+            let _ = std::fs::remove_file(p);
+        }
+        std::process::exit(130);
+    });
 
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
         let pb = ProgressBar::new(plan.surface_bricks() as u64);
@@ -95,30 +133,53 @@ pub fn run(a: MeshArgs) -> Result<()> {
         );
         pb
     });
-    let mesh = plan.run(&|done| {
+    let progress = |done: usize| {
         if let Some(pb) = &bar {
             pb.set_position(done as u64);
         }
-    })?;
+    };
+    let made = if stream {
+        stream_mesh(&plan, &a.output, format, format.wants_normals(), &progress).map(|t| Summary {
+            triangles: t.triangles,
+            vertices: t.vertices,
+            bad_edges: None,
+            euler: None,
+            volume: t.volume,
+            area: t.area,
+            bbox: t.bbox,
+        })
+    } else {
+        plan.run(&progress).and_then(|mesh| {
+            let normals = format.wants_normals().then(|| plan.normals(&mesh));
+            write_mesh(&a.output, format, &mesh, normals.as_deref())?;
+            let r = check::check(&mesh);
+            Ok(Summary {
+                triangles: r.triangles as u64,
+                vertices: r.vertices as u64,
+                bad_edges: Some(r.bad_edges),
+                euler: Some(r.euler),
+                volume: r.volume,
+                area: r.area,
+                bbox: r.bbox,
+            })
+        })
+    };
+    PARTIAL.lock().unwrap_or_else(|e| e.into_inner()).clear();
     if let Some(pb) = bar {
         pb.finish_and_clear();
     }
-
-    let normals = format.wants_normals().then(|| plan.normals(&mesh));
-    *PARTIAL.lock().unwrap_or_else(|e| e.into_inner()) = Some(temp_path(&a.output));
-    // Only the first handler of the process can be installed; an error here
-    // just means Ctrl-C falls back to the default (the .part file stays).
-    let _ = ctrlc::set_handler(|| {
-        if let Some(p) = PARTIAL.lock().unwrap_or_else(|e| e.into_inner()).take() {
-            let _ = std::fs::remove_file(p);
-        }
-        std::process::exit(130);
+    let r = made?;
+    // HyperFun run-time errors at the grid nodes: those nodes are NaN, i.e.
+    // outside (documented in the README); counted for the summary.
+    let errors = m.hf.as_ref().map(|hf| {
+        let g = &plan.grid;
+        let axis = |a: usize| -> Vec<f64> {
+            (0..=g.cells[a])
+                .map(|i| g.origin[a] + g.h * i as f64)
+                .collect()
+        };
+        hf.error_census(&axis(0), &axis(1), &axis(2))
     });
-    let written = write_mesh(&a.output, format, &mesh, normals.as_deref());
-    PARTIAL.lock().unwrap_or_else(|e| e.into_inner()).take();
-    written?;
-
-    let r = check::check(&mesh);
     let secs = start.elapsed().as_secs_f64();
     let peak = memory::peak_rss().unwrap_or(f64::NAN);
     if a.json {
@@ -130,13 +191,15 @@ pub fn run(a: MeshArgs) -> Result<()> {
             "vertices": r.vertices,
             "bad_edges": r.bad_edges,
             "euler": r.euler,
+            "streamed": stream,
             "volume": r.volume,
             "area": r.area,
             "bbox": r.bbox,
             "seconds": secs,
             "peak_bytes": peak,
-            "predicted_peak_bytes": est.bytes,
+            "predicted_peak_bytes": predicted,
             "thin_cells": plan.thin_cells(),
+            "runtime_errors": errors.as_ref().map(|c| c.errors),
         });
         println!("{s}");
     } else if !a.quiet {
@@ -147,11 +210,17 @@ pub fn run(a: MeshArgs) -> Result<()> {
         );
         println!("  triangles  {}", r.triangles);
         println!("  vertices   {}", r.vertices);
-        println!("  bad edges  {} (euler {})", r.bad_edges, r.euler);
+        match (r.bad_edges, r.euler) {
+            (Some(b), Some(e)) => println!("  bad edges  {b} (euler {e})"),
+            _ => println!("  bad edges  not checked (streamed to disk)"),
+        }
         println!("  volume     {:.6}", r.volume);
         println!("  area       {:.6}", r.area);
         println!("  bbox       {:?} .. {:?}", r.bbox[0], r.bbox[1]);
         println!("  time       {secs:.2} s");
+        if let Some(c) = &errors {
+            println!("  run-time errors at {c}; those nodes count as outside");
+        }
         if plan.thin_cells() > 0 {
             println!(
                 "  note       interval analysis found {} cells that may hold features \
@@ -162,7 +231,7 @@ pub fn run(a: MeshArgs) -> Result<()> {
         println!(
             "  peak mem   {:.1} MiB (predicted {:.1} MiB)",
             peak / MIB,
-            est.bytes / MIB
+            predicted / MIB
         );
     }
     Ok(())

@@ -5,7 +5,7 @@ use crate::slice_cmd::bounds;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use microfrep_core::Tape;
-use microfrep_render::{cutaway, ray_cast, section, Camera, Plane, View};
+use microfrep_render::{cutaway, ray_cast_with, section, Camera, Csg, Plane, View};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -27,7 +27,7 @@ pub struct RenderArgs {
     /// Remove the octant nearest the viewer to show the inside.
     #[arg(long)]
     cutaway: bool,
-    /// Box to frame: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds).
+    /// Box to frame: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds, else from interval analysis).
     #[arg(long, allow_hyphen_values = true)]
     bounds: Option<String>,
 }
@@ -48,7 +48,7 @@ fn size(s: &str) -> Result<(usize, usize)> {
 
 pub fn run(a: RenderArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (min, max) = bounds(&a.model, a.bounds.as_deref())?;
+    let (min, max) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
     let (w, h) = size(&a.size)?;
     let img = match a.section {
         Some(_) if a.cutaway => bail!("--section and --cutaway do not combine"),
@@ -59,8 +59,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
             } else {
                 m.expr
             };
-            ray_cast(
+            ray_cast_with(
                 &Tape::new(&e),
+                Some(&Csg::new(&e)),
                 &Camera::fit(a.view, min, max, w, h),
                 min,
                 max,

@@ -29,7 +29,7 @@ pub struct SliceArgs {
     /// Pixel size.
     #[arg(long, default_value_t = 0.025)]
     pixel: f64,
-    /// Box to slice: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds).
+    /// Box to slice: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds, else from interval analysis).
     #[arg(long, allow_hyphen_values = true)]
     bounds: Option<String>,
     #[arg(long, value_enum, default_value_t = SliceFormat::Png)]
@@ -39,8 +39,13 @@ pub struct SliceArgs {
     aa: bool,
 }
 
-/// The box from `--bounds`, else the built-in example's own.
-pub fn bounds(model: &str, arg: Option<&str>) -> Result<([f64; 3], [f64; 3])> {
+/// The box from `--bounds`, else the built-in example's own, else what
+/// interval analysis proves about the model `expr`.
+pub fn bounds(
+    model: &str,
+    expr: &microfrep_core::Expr,
+    arg: Option<&str>,
+) -> Result<([f64; 3], [f64; 3])> {
     if let Some(s) = arg {
         let v: Vec<f64> = s
             .split(',')
@@ -54,13 +59,15 @@ pub fn bounds(model: &str, arg: Option<&str>) -> Result<([f64; 3], [f64; 3])> {
     }
     match microfrep_structures::examples::by_name(model) {
         Some(e) => Ok(e.bounds),
-        None => bail!("model '{model}' has no built-in bounds: give --bounds"),
+        None => microfrep_mesh::bounds::model_bounds_of(expr)
+            .map(|b| (b[0], b[1]))
+            .with_context(|| format!("model '{model}'")),
     }
 }
 
 pub fn run(a: SliceArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (min, max) = bounds(&a.model, a.bounds.as_deref())?;
+    let (min, max) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
     let grid = SliceGrid::new(min, max, a.layer, a.pixel)?;
     let format = match a.format {
         SliceFormat::Png => Format::Png { aa: a.aa },
@@ -84,6 +91,15 @@ pub fn run(a: SliceArgs) -> Result<()> {
     );
     write_stack(&tape, &grid, format, &a.output, &|| bar.inc(1))?;
     bar.finish_and_clear();
+    // HyperFun run-time errors at the pixel centres: those pixels are NaN,
+    // i.e. empty (documented in the README); counted for the summary.
+    if let Some(hf) = &m.hf {
+        let xs: Vec<f64> = (0..grid.nx).map(|i| grid.x(i)).collect();
+        let ys: Vec<f64> = (0..grid.ny).map(|j| grid.y(j)).collect();
+        let zs: Vec<f64> = (0..grid.layers).map(|k| grid.z(k)).collect();
+        let c = hf.error_census(&xs, &ys, &zs);
+        eprintln!("run-time errors at {c}; those pixels are empty");
+    }
     eprintln!(
         "{} layers of {} x {} pixels -> {}",
         grid.layers,

@@ -21,14 +21,14 @@ pub struct VoxelsArgs {
     /// Write f32 values instead of occupancy bytes.
     #[arg(long)]
     field: bool,
-    /// Box to sample: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds).
+    /// Box to sample: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds, else from interval analysis).
     #[arg(long, allow_hyphen_values = true)]
     bounds: Option<String>,
 }
 
 pub fn run(a: VoxelsArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (min, max) = bounds(&a.model, a.bounds.as_deref())?;
+    let (min, max) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
     let grid = VoxelGrid::new(min, max, a.voxel)?;
     write_voxels(&Tape::new(&m.expr), &grid, a.field, &a.output)?;
     let [nx, ny, nz] = grid.dims;

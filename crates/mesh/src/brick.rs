@@ -2,10 +2,11 @@
 //! tetrahedra over its cells, refinement of the vertices it owns.
 
 use crate::classify::{proven_sign, unproven_cells, BrickClass};
+use crate::csg::{Csg, CsgEval};
 use crate::grid::Grid;
 use crate::refine::{refine_edges, Edge};
 use crate::tets::cell_table;
-use microfrep_core::{BatchEval, IntervalEval, Tape, BLOCK};
+use microfrep_core::{BatchEval, Tape, BLOCK};
 
 /// The part of the mesh made by one brick. Vertices on grid edges that start
 /// in this brick's half-open node range are owned here; the others are
@@ -27,11 +28,14 @@ pub struct BrickMesh {
 /// Per-thread buffers, reused from brick to brick.
 pub struct Scratch<'t> {
     batch: BatchEval<'t>,
-    interval: IntervalEval<'t>,
+    interval: CsgEval<'t>,
     vals: Vec<f32>,
     inside: Vec<u8>,
-    /// Local edge (node * 8 + dir) -> local vertex, u32::MAX when unset.
+    /// Local edge -> local vertex, u32::MAX when unset, for the edges that
+    /// start in two node layers: ((z & 1) * layer + y * nx + x) * 8 + dir.
     vmap: Vec<u32>,
+    /// Start node (x, y, z; 9 bits each) and direction (bits 27..30) of
+    /// each local vertex.
     verts: Vec<u32>,
     remap: Vec<u32>,
     edges: Vec<Edge>,
@@ -39,16 +43,16 @@ pub struct Scratch<'t> {
 }
 
 impl<'t> Scratch<'t> {
-    pub fn new(tape: &'t Tape, brick: usize) -> Self {
+    pub fn new(tape: &'t Tape, csg: &'t Csg, brick: usize) -> Self {
         let nodes = (brick + 1).pow(3);
         Scratch {
             batch: BatchEval::new(tape),
-            interval: IntervalEval::new(tape),
+            interval: CsgEval::new(csg),
             edges: Vec::new(),
             tris: Vec::new(),
             vals: vec![0.0; nodes],
             inside: vec![0; nodes],
-            vmap: vec![u32::MAX; nodes * 8],
+            vmap: vec![u32::MAX; 2 * (brick + 1) * (brick + 1) * 8],
             verts: Vec::new(),
             remap: Vec::new(),
         }
@@ -75,42 +79,55 @@ pub fn mesh_brick(
         };
     }
 
-    // Marching tetrahedra over the cells; vertices deduplicated per local edge.
+    // Marching tetrahedra over the cells, a layer of cells at a time;
+    // vertices deduplicated per local edge through `vmap`, which holds the
+    // two node layers the current cell layer touches (small enough to stay
+    // in cache).
     let table = cell_table();
     let (sx, sy) = (1, n[0]);
     let sz = n[0] * n[1];
-    let corner_off: [usize; 8] =
-        std::array::from_fn(|c| (c & 1) * sx + ((c >> 1) & 1) * sy + ((c >> 2) & 1) * sz);
     s.tris.clear();
     s.verts.clear();
+    let mut q = vec![0u8; n[0]];
     for k in 0..n[2] - 1 {
         for j in 0..n[1] - 1 {
             let row = j * sy + k * sz;
+            // Corner bits of the four node rows around this row of cells:
+            // bit c for corner c = x + 2 y + 4 z, x = 0 here.
+            let r = |dj: usize, dk: usize| &s.inside[row + dj * sy + dk * sz..][..n[0]];
+            let (r00, r10, r01, r11) = (r(0, 0), r(1, 0), r(0, 1), r(1, 1));
+            for i in 0..n[0] {
+                q[i] = r00[i] | (r10[i] << 2) | (r01[i] << 4) | (r11[i] << 6);
+            }
             for i in 0..n[0] - 1 {
-                let base = row + i;
-                let mut mask = 0usize;
-                for (c, off) in corner_off.iter().enumerate() {
-                    mask |= (s.inside[base + off] as usize) << c;
-                }
+                let mask = (q[i] | (q[i + 1] << 1)) as usize;
                 if mask == 0 || mask == 255 {
                     continue;
                 }
-                let r = table.start[mask] as usize..table.start[mask + 1] as usize;
-                for tri in &table.tris[r] {
+                let range = table.start[mask] as usize..table.start[mask + 1] as usize;
+                for tri in &table.tris[range] {
                     s.tris.push(tri.map(|e| {
-                        let node = base + corner_off[(e >> 3) as usize];
-                        let key = node * 8 + (e & 7) as usize;
-                        let v = &mut s.vmap[key];
+                        let c = (e >> 3) as usize;
+                        let dir = (e & 7) as u32;
+                        let (ci, cj, ck) = (i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
+                        let slot = ((ck & 1) * sz + cj * sy + ci) * 8 + dir as usize;
+                        let v = &mut s.vmap[slot];
                         if *v == u32::MAX {
                             *v = s.verts.len() as u32;
-                            s.verts.push(key as u32);
+                            s.verts
+                                .push(ci as u32 | (cj as u32) << 9 | (ck as u32) << 18 | dir << 27);
                         }
                         *v
                     }));
                 }
             }
         }
+        // Node layer k is touched by no later cell layer.
+        let parity = (k & 1) * sz * 8;
+        s.vmap[parity..parity + sz * 8].fill(u32::MAX);
     }
+    let parity = ((n[2] - 1) & 1) * sz * 8;
+    s.vmap[parity..parity + sz * 8].fill(u32::MAX);
     // Owned vertices first (in creation order), then foreign ones. A vertex
     // is owned when its edge starts below the brick's upper faces (or on
     // the grid's last brick along that axis).
@@ -120,9 +137,10 @@ pub fn mesh_brick(
     s.remap.resize(s.verts.len(), u32::MAX);
     s.edges.clear();
     let mut owned = 0u32;
-    for (vi, &key) in s.verts.iter().enumerate() {
-        let (l, dir) = (key as usize / 8, key as usize % 8);
-        let ln = [l % n[0], (l / n[0]) % n[1], l / sz];
+    for (vi, &packed) in s.verts.iter().enumerate() {
+        let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
+        let dir = (packed >> 27) as usize;
+        let l = ln[0] + ln[1] * sy + ln[2] * sz;
         let g: [usize; 3] = std::array::from_fn(|a| lo[a] + ln[a]);
         let gkey = grid.node_index(g) * 8 + dir as u64;
         if (0..3).all(|a| ln[a] + 1 < n[a] || last[a]) {
@@ -156,9 +174,6 @@ pub fn mesh_brick(
         .iter()
         .map(|t| t.map(|v| s.remap[v as usize]))
         .collect();
-    for &key in &s.verts {
-        s.vmap[key as usize] = u32::MAX;
-    }
     out
 }
 

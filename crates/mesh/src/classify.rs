@@ -1,8 +1,9 @@
 //! Brick classification by interval arithmetic: bricks where the model is
 //! provably negative (empty) or non-negative (full) need no sampling.
 
+use crate::csg::{Csg, CsgEval};
 use crate::grid::Grid;
-use microfrep_core::{Interval, IntervalEval, Tape};
+use microfrep_core::Interval;
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -13,12 +14,13 @@ pub enum BrickClass {
     Surface,
 }
 
-/// Class of every brick, in brick index order.
-pub fn classify(tape: &Tape, grid: &Grid) -> Vec<BrickClass> {
+/// Class of every brick, in brick index order, from interval bounds taken
+/// through the model's set operations.
+pub fn classify(csg: &Csg, grid: &Grid) -> Vec<BrickClass> {
     (0..grid.brick_count())
         .into_par_iter()
         .map_init(
-            || IntervalEval::new(tape),
+            || CsgEval::new(csg),
             |ev, k| {
                 let (lo, n) = grid.brick_nodes(grid.brick_coords(k));
                 let a = grid.node_pos(lo);
@@ -29,7 +31,7 @@ pub fn classify(tape: &Tape, grid: &Grid) -> Vec<BrickClass> {
                     BrickClass::Surface
                 } else if r.hi < 0.0 {
                     BrickClass::Empty
-                } else if r.lo >= 0.0 {
+                } else if r.lo >= 0.0 && !r.may_be_nan() {
                     BrickClass::Full
                 } else {
                     BrickClass::Surface
@@ -46,7 +48,7 @@ pub fn proven_sign(grid: &Grid, classes: &[BrickClass], i: [usize; 3]) -> Option
     let cand = |a: usize| -> [Option<usize>; 2] {
         let b = i[a] / grid.brick;
         let own = (b < grid.bricks[a]).then_some(b);
-        let below = (i[a] % grid.brick == 0 && b > 0).then(|| b - 1);
+        let below = (i[a].is_multiple_of(grid.brick) && b > 0).then(|| b - 1);
         [own, below]
     };
     let (cx, cy, cz) = (cand(0), cand(1), cand(2));
@@ -64,12 +66,19 @@ pub fn proven_sign(grid: &Grid, classes: &[BrickClass], i: [usize; 3]) -> Option
     None
 }
 
+/// Interval evaluations spent at most per brick on [`unproven_cells`]:
+/// where the bounds are loose (deep R-function trees) proving every cell
+/// would cost one evaluation per cell and more, dwarfing the meshing.
+const THIN_BUDGET: usize = 2048;
+
 /// Cell-sized boxes of a brick whose samples all have one sign that
 /// interval analysis cannot prove to have that sign throughout: places
 /// where a feature thinner than a cell may have been missed. Found by
-/// subdividing the brick and dropping boxes proven uniform.
+/// subdividing the brick and dropping boxes proven uniform; when the
+/// evaluation budget runs out, the cells of the boxes left count as
+/// unproven.
 pub fn unproven_cells(
-    ev: &mut IntervalEval,
+    ev: &mut CsgEval,
     grid: &Grid,
     lo: [usize; 3],
     n: [usize; 3],
@@ -77,12 +86,22 @@ pub fn unproven_cells(
 ) -> usize {
     let mut stack = vec![(lo, n.map(|c| c - 1))];
     let mut found = 0;
+    let mut budget = THIN_BUDGET;
     while let Some((c0, size)) = stack.pop() {
+        if budget == 0 {
+            found += size.iter().product::<usize>();
+            continue;
+        }
+        budget -= 1;
         let a = grid.node_pos(c0);
         let b = grid.node_pos(std::array::from_fn(|k| c0[k] + size[k]));
         let iv = |k: usize| Interval::new(a[k], b[k]);
         let r = ev.eval(iv(0), iv(1), iv(2));
-        let proven = !r.is_nan() && if inside { r.lo >= 0.0 } else { r.hi < 0.0 };
+        let proven = if inside {
+            r.lo >= 0.0 && !r.may_be_nan()
+        } else {
+            r.hi < 0.0
+        };
         if proven {
             continue;
         }

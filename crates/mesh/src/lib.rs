@@ -1,14 +1,17 @@
 //! Watertight, 2-manifold triangle meshes of FRep models (inside is f >= 0).
 //!
 //! A uniform grid is cut into bricks; bricks are classified with interval
-//! arithmetic (empty and full ones skipped), surface bricks are sampled
+//! arithmetic taken through the model's set operations ([`csg`]; empty and
+//! full ones skipped), surface bricks are sampled
 //! densely with the f32 batch evaluator and meshed by marching tetrahedra
 //! ([`tets`] argues why the result is closed and manifold), vertices are
 //! keyed by their global grid edge so bricks share them, and moved onto the
 //! surface by regula falsi on the batch evaluator; a last pass offsets them
-//! along their normals to cancel the chordal volume loss ([`inflate`]).
-//! Bricks run in parallel; the output depends only on the model and the
-//! options.
+//! along their normals to cancel the chordal volume loss ([`correct`]).
+//! Bricks run in parallel, a few z-slabs of bricks at a time, and the mesh
+//! goes to a [`sink::MeshSink`] as it is made (memory, or a file for meshes
+//! too large to hold: [`write::stream_mesh`]); the output depends only on
+//! the model and the options.
 //!
 //! ```
 //! use microfrep_core::{prims, Expr};
@@ -24,15 +27,16 @@ pub mod bounds;
 mod brick;
 pub mod check;
 mod classify;
+pub mod correct;
+pub mod csg;
 mod grid;
-pub mod inflate;
 pub mod memory;
+mod pipeline;
 mod refine;
-mod stitch;
+pub mod sink;
 pub mod tets;
 pub mod write;
 
-use brick::{mesh_brick, BrickMesh, Scratch};
 use classify::{classify, BrickClass};
 pub use grid::Grid;
 use microfrep_core::{Expr, GradBatchEval, Tape};
@@ -85,6 +89,8 @@ impl MeshOptions {
 /// enough to predict its memory (see [`memory`]).
 pub struct Plan {
     pub tape: Tape,
+    /// The same model's set-operation tree, for tight interval signs.
+    csg: csg::Csg,
     pub grid: Grid,
     classes: Vec<BrickClass>,
     thin_cells: std::sync::atomic::AtomicUsize,
@@ -99,10 +105,13 @@ impl Plan {
             )));
         }
         let grid = Grid::new(opts.bounds, opts.resolution, opts.brick)?;
-        let tape = Tape::new(&clip(expr, opts.bounds));
-        let classes = classify(&tape, &grid);
+        let clipped = clip(expr, opts.bounds);
+        let tape = Tape::new(&clipped);
+        let csg = csg::Csg::new(&clipped);
+        let classes = classify(&csg, &grid);
         Ok(Plan {
             tape,
+            csg,
             grid,
             classes,
             thin_cells: Default::default(),
@@ -117,31 +126,23 @@ impl Plan {
             .count()
     }
 
-    /// Meshes all surface bricks; `progress` is called with the number of
-    /// bricks done after each one.
+    /// Meshes all surface bricks into memory; `progress` is called with
+    /// the number of bricks done after each one.
     pub fn run(&self, progress: &(dyn Fn(usize) + Sync)) -> Result<Mesh, MeshError> {
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let parts: Vec<BrickMesh> = (0..self.grid.brick_count())
-            .into_par_iter()
-            .map_init(
-                || Scratch::new(&self.tape, self.grid.brick),
-                |s, k| {
-                    if self.classes[k] != BrickClass::Surface {
-                        return BrickMesh::default();
-                    }
-                    let b = self.grid.brick_coords(k);
-                    let m = mesh_brick(&self.grid, &self.classes, b, s);
-                    progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-                    m
-                },
-            )
-            .collect();
-        let thin = parts.iter().map(|p| p.thin_cells).sum();
-        self.thin_cells
-            .store(thin, std::sync::atomic::Ordering::Relaxed);
-        let mut mesh = stitch::stitch(&self.grid, parts)?;
-        inflate::inflate(&self.tape, &mut mesh, self.grid.h);
-        Ok(mesh)
+        let mut c = sink::Collect::default();
+        self.run_into(&mut c, progress)?;
+        Ok(c.mesh)
+    }
+
+    /// Meshes all surface bricks into `sink`, a few z-slabs of bricks at a
+    /// time (so a sink that writes to disk keeps memory bounded); the
+    /// output is the same as [`Self::run`]'s.
+    pub fn run_into(
+        &self,
+        sink: &mut (dyn sink::MeshSink + Send),
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<(), MeshError> {
+        pipeline::run(self, sink, progress)
     }
 
     /// After [`Self::run`]: cells in surface-free bricks where interval
@@ -153,9 +154,14 @@ impl Plan {
 
     /// Unit outward normals (minus the normalised gradient) at the vertices.
     pub fn normals(&self, mesh: &Mesh) -> Vec<[f32; 3]> {
-        let mut out = vec![[0.0f32; 3]; mesh.vertices.len()];
+        self.normals_at(&mesh.vertices)
+    }
+
+    /// Unit outward normals (minus the normalised gradient) at `points`.
+    pub fn normals_at(&self, points: &[[f32; 3]]) -> Vec<[f32; 3]> {
+        let mut out = vec![[0.0f32; 3]; points.len()];
         out.par_chunks_mut(4096)
-            .zip(mesh.vertices.par_chunks(4096))
+            .zip(points.par_chunks(4096))
             .for_each_init(
                 || GradBatchEval::new(&self.tape),
                 |ev, (dst, src)| {

@@ -9,10 +9,10 @@ use microfrep_core::eval_grid_par;
 /// Kuhn split (measured on a sphere: about 5.9 and 3.0; rounded up).
 const TRIS_PER_CELL: f64 = 6.2;
 const VERTS_PER_CELL: f64 = 3.1;
-/// Bytes per triangle at the peak: the brick's copy and the final one
-/// (12 + 12), the checker's half-edges (24) and sorted copy (12), plus
-/// allocator slack (the 512^3 tori-ball peaked at 6.5 GiB, 75 bytes per
-/// triangle with the vertices, while this predicted 5.6 GiB with 64 here).
+/// Bytes per triangle at the peak, which comes in the mesh check after the
+/// mesh is made: the mesh (12), the checker's half-edges (24) and sorted
+/// copy (12), plus slack. Calibrated on the 512^3 tori-ball (92 M
+/// triangles): 5.3 GiB measured with the check, 6.3 GiB predicted.
 const BYTES_PER_TRI: f64 = 76.0;
 /// Bytes per vertex: brick copy, key, final copy, normal, checker's copy.
 const BYTES_PER_VERT: f64 = 64.0;
@@ -54,12 +54,32 @@ pub fn estimate(plan: &Plan) -> Estimate {
     let cells = surface as f64 * scale * scale;
     let triangles = cells * TRIS_PER_CELL;
     let vertices = cells * VERTS_PER_CELL;
-    let scratch = rayon::current_num_threads() as f64 * (g.brick as f64 + 1.0).powi(3) * 42.0;
+    let scratch = scratch_bytes(plan);
     Estimate {
         triangles,
         vertices,
         bytes: triangles * BYTES_PER_TRI + vertices * BYTES_PER_VERT + scratch + 64e6,
     }
+}
+
+/// Bytes per triangle and per vertex held by the pipeline while it works:
+/// the brick's triangles and their global copy (12 + 12); per vertex its
+/// position, key, two correction sums and final copy (12 + 12 + 40 + 12).
+const WINDOW_BYTES_PER_TRI: f64 = 24.0;
+const WINDOW_BYTES_PER_VERT: f64 = 76.0;
+
+/// Estimated peak bytes of `plan` streamed to disk: the pipeline holds
+/// three groups of z-slabs of bricks at a time, never the whole mesh.
+pub fn streaming_bytes(plan: &Plan, e: &Estimate) -> f64 {
+    let slabs = plan.grid.bricks[2] as f64;
+    let held = ((3 * plan.slabs_per_group()) as f64).min(slabs) / slabs;
+    let window = held * (e.triangles * WINDOW_BYTES_PER_TRI + e.vertices * WINDOW_BYTES_PER_VERT);
+    // Surface is not spread evenly over the slabs: allow twice the mean.
+    2.0 * window + scratch_bytes(plan) + 64e6
+}
+
+fn scratch_bytes(plan: &Plan) -> f64 {
+    rayon::current_num_threads() as f64 * (plan.grid.brick as f64 + 1.0).powi(3) * 42.0
 }
 
 /// `MemAvailable` from /proc/meminfo in bytes, if readable.

@@ -1,8 +1,9 @@
 //! Bounds from interval analysis, memory prediction and input errors.
 
 use microfrep_core::{prims, Expr, Tape};
-use microfrep_mesh::bounds::model_bounds;
+use microfrep_mesh::bounds::{model_bounds, model_bounds_of};
 use microfrep_mesh::{memory, MeshError, MeshOptions, Plan};
+use microfrep_structures::examples::{shell_lattice, toriball};
 
 fn ball() -> Expr {
     prims::sphere(&Expr::xyz(), &prims::v3([0.5, 0.0, -0.25]), 1.0)
@@ -19,9 +20,47 @@ fn bounds_of_a_ball_enclose_it_tightly() {
 }
 
 #[test]
+fn lattices_cut_by_a_block_or_a_shell_get_that_box() {
+    // Plain interval arithmetic on the whole R-function gives boxes of about
+    // [-1.6, 1.6] x [-1.6, 1.6] x [-1.9, 1.9] and [-7, 7]^3 here.
+    for (name, e) in [("toriball", toriball()), ("shell_lattice", shell_lattice())] {
+        let b = model_bounds_of(&e).unwrap();
+        for a in 0..3 {
+            assert!(b[0][a] <= -1.0 && b[0][a] > -1.001, "{name}: {b:?}");
+            assert!(b[1][a] >= 1.0 && b[1][a] < 1.001, "{name}: {b:?}");
+        }
+    }
+}
+
+#[test]
+fn a_slab_bounds_only_its_own_axis() {
+    let p = Expr::xyz();
+    let slab = (&p[0] - 0.5) * (2.0 - &p[0]);
+    let e = model_bounds_of(&slab).unwrap_err();
+    assert!(e.to_string().contains("--bounds"), "{e}");
+    let ball = prims::sphere(&p, &prims::v3([0.0; 3]), 1.0);
+    let cut = microfrep_core::frep::intersection(&ball, &slab, 0.0);
+    let b = model_bounds_of(&cut).unwrap();
+    assert!(
+        b[0][0] <= 0.5 && b[0][0] > 0.49 && b[1][0] >= 1.0 && b[1][0] < 1.01,
+        "{b:?}"
+    );
+    // The whole model then shows that y and z stay within the disc x = 0.5
+    // cuts from the ball (radius 0.866).
+    assert!(b[0][1] <= -0.866 && b[0][1] > -1.0, "{b:?}");
+}
+
+#[test]
 fn unbounded_models_ask_for_bounds() {
     let half = prims::half_space(&Expr::xyz(), [0.0; 3], [0.0, 0.0, 1.0]);
     let e = model_bounds(&Tape::new(&half)).unwrap_err();
+    assert!(e.to_string().contains("--bounds"), "{e}");
+    let e = model_bounds_of(&half).unwrap_err();
+    assert!(e.to_string().contains("--bounds"), "{e}");
+    // A lattice alone is periodic over all space.
+    let slabs = microfrep_structures::lattice::Slabs::uniform(6.0, 0.3);
+    let lattice = microfrep_structures::lattice::rod_lattice(&Expr::xyz(), &slabs, 1.0);
+    let e = model_bounds_of(&lattice.min(&half)).unwrap_err();
     assert!(e.to_string().contains("--bounds"), "{e}");
 }
 

@@ -2,6 +2,7 @@
 //! interval-arithmetic root finding, cut-away views and section images.
 
 pub mod camera;
+pub mod csg;
 mod error;
 pub mod image;
 pub mod section;
@@ -9,10 +10,11 @@ pub mod shade;
 pub mod trace;
 
 pub use camera::{Camera, View};
+pub use csg::Csg;
 pub use error::{RenderError, Result};
 pub use image::RgbImage;
 pub use section::{section, Plane};
-pub use shade::ray_cast;
+pub use shade::{ray_cast, ray_cast_with};
 
 use microfrep_core::Expr;
 

@@ -62,11 +62,11 @@ pub fn section(
         |ev, (y, row)| {
             let mut p = [vec![0f32; w], vec![0f32; w], vec![0f32; w]];
             let v = cv + (0.5 * h as f64 - y as f64 - 0.5) * scale;
-            for x in 0..w {
-                p[ra][x] = (cu + (x as f64 + 0.5 - 0.5 * w as f64) * scale) as f32;
-                p[ua][x] = v as f32;
-                p[plane.axis][x] = plane.value as f32;
+            for (x, u) in p[ra].iter_mut().enumerate() {
+                *u = (cu + (x as f64 + 0.5 - 0.5 * w as f64) * scale) as f32;
             }
+            p[ua].fill(v as f32);
+            p[plane.axis].fill(plane.value as f32);
             ev.eval(&p[0], &p[1], &p[2], row);
         },
     );

@@ -1,6 +1,7 @@
 //! Ray-cast images: hits shaded Lambert plus ambient from the gradient.
 
 use crate::camera::{dot, normalize, Camera};
+use crate::csg::Csg;
 use crate::image::RgbImage;
 use crate::trace::Tracer;
 use microfrep_core::{GradEval, Tape};
@@ -15,6 +16,19 @@ const AMBIENT: f64 = 0.25;
 /// Ray casts the model inside the box `min`..`max` with `cam`; tiles in
 /// parallel, same bytes every run.
 pub fn ray_cast(tape: &Tape, cam: &Camera, min: [f64; 3], max: [f64; 3]) -> RgbImage {
+    ray_cast_with(tape, None, cam, min, max)
+}
+
+/// As [`ray_cast`]; with `csg` (built from the same model) the interval
+/// search goes through the model's set operations, much tighter on CSG
+/// trees of lattices and shells.
+pub fn ray_cast_with(
+    tape: &Tape,
+    csg: Option<&Csg>,
+    cam: &Camera,
+    min: [f64; 3],
+    max: [f64; 3],
+) -> RgbImage {
     let (w, h) = (cam.width, cam.height);
     // Light from over the viewer's left shoulder.
     let light = normalize([0, 1, 2].map(|a| -cam.dir[a] + 0.6 * cam.up[a] - 0.4 * cam.right[a]));
@@ -25,13 +39,20 @@ pub fn ray_cast(tape: &Tape, cam: &Camera, min: [f64; 3], max: [f64; 3]) -> RgbI
     let shaded: Vec<Vec<[u8; 3]>> = tiles
         .par_iter()
         .map_init(
-            || (Tracer::new(tape, cam, min, max), GradEval::new(tape)),
+            || {
+                let tr = match csg {
+                    Some(c) => Tracer::with_csg(tape, c, cam, min, max),
+                    None => Tracer::new(tape, cam, min, max),
+                };
+                (tr, GradEval::new(tape))
+            },
             |(tr, ge), &(x0, y0)| {
                 let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
                 tr.start_tile();
+                let depths = tr.tile(x0, y0, tw, th);
                 (0..tw * th)
                     .map(|k| {
-                        let Some(t) = tr.pixel(x0 + k % tw, y0 + k / tw) else {
+                        let Some(t) = depths[k] else {
                             return BACKGROUND;
                         };
                         let (u, v) = cam.screen((x0 + k % tw) as f64, (y0 + k / tw) as f64);

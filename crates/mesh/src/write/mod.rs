@@ -4,9 +4,11 @@
 mod obj;
 mod ply;
 mod stl;
+mod stream;
 mod threemf;
 
 pub use stl::StlWriter;
+pub use stream::{stream_mesh, stream_temp_paths};
 
 use crate::{Mesh, MeshError};
 use std::fs::File;

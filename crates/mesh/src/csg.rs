@@ -1,0 +1,160 @@
+//! Interval bounds that know the model's set operations. Plain interval
+//! arithmetic on an R-function `f1 + f2 - sqrt(f1^2 + f2^2)` meets `f1`
+//! twice and comes out loose, so on CSG trees of lattices and shells it
+//! rarely proves a box empty until the box is tiny. A ray caster only needs
+//! the sign, and an R-function intersection (union) with alpha in [-1, 1]
+//! has everywhere the sign of `min` (`max`) of its arguments; so the tree of
+//! set operations is read off the expression, its leaves get ordinary
+//! interval evaluation, and the nodes combine them with `min`, `max` and
+//! negation. The result bounds a function with the model's signs, not the
+//! model's values: use it for "empty" (`hi < 0`) and "solid" (`lo >= 0`)
+//! only. (The same module as `microfrep_render::csg`; it belongs in the
+//! core crate, where both could share it.)
+
+use microfrep_core::{BinaryOp, Expr, ExprNode, Interval, IntervalEval, Tape, UnaryOp};
+
+enum Node {
+    Leaf(usize),
+    And(Box<Node>, Box<Node>),
+    Or(Box<Node>, Box<Node>),
+    Not(Box<Node>),
+}
+
+/// A model's set-operation tree with its leaves compiled.
+pub struct Csg {
+    root: Node,
+    tapes: Vec<Tape>,
+}
+
+fn same(a: &Expr, b: &Expr) -> bool {
+    std::ptr::eq(a.node(), b.node())
+}
+
+fn positive_const(e: &Expr) -> bool {
+    e.as_const().is_some_and(|c| c > 0.0 && c.is_finite())
+}
+
+/// Whether `s` is `f1^2 + f2^2`, or that minus `c f1 f2` with |c| <= 2:
+/// the root argument of an R-function with alpha in [-1, 1].
+fn is_r_root_arg(s: &Expr, f1: &Expr, f2: &Expr) -> bool {
+    let squares = |e: &Expr| match e.node() {
+        ExprNode::Binary(BinaryOp::Add, a, b) => matches!(
+            (a.node(), b.node()),
+            (ExprNode::Unary(UnaryOp::Square, p), ExprNode::Unary(UnaryOp::Square, q))
+                if same(p, f1) && same(q, f2)
+        ),
+        _ => false,
+    };
+    match s.node() {
+        ExprNode::Binary(BinaryOp::Sub, sq, prod) if squares(sq) => match prod.node() {
+            ExprNode::Binary(BinaryOp::Mul, cf1, g2) if same(g2, f2) => match cf1.node() {
+                ExprNode::Binary(BinaryOp::Mul, c, g1) if same(g1, f1) => {
+                    c.as_const().is_some_and(|c| c.abs() <= 2.0)
+                }
+                _ => false,
+            },
+            _ => false,
+        },
+        _ => squares(s),
+    }
+}
+
+impl Csg {
+    pub fn new(e: &Expr) -> Csg {
+        let mut leaves: Vec<(*const ExprNode, Tape)> = Vec::new();
+        let root = build(e, &mut leaves);
+        Csg {
+            root,
+            tapes: leaves.into_iter().map(|(_, t)| t).collect(),
+        }
+    }
+}
+
+fn build(e: &Expr, leaves: &mut Vec<(*const ExprNode, Tape)>) -> Node {
+    let node = |a: &Expr, leaves: &mut Vec<_>| Box::new(build(a, leaves));
+    match e.node() {
+        ExprNode::Binary(BinaryOp::Min, a, b) => Node::And(node(a, leaves), node(b, leaves)),
+        ExprNode::Binary(BinaryOp::Max, a, b) => Node::Or(node(a, leaves), node(b, leaves)),
+        ExprNode::Binary(BinaryOp::Div | BinaryOp::Mul, a, c) if positive_const(c) => {
+            build(a, leaves)
+        }
+        ExprNode::Binary(BinaryOp::Mul, c, a) if positive_const(c) => build(a, leaves),
+        ExprNode::Unary(UnaryOp::Neg, a) => Node::Not(node(a, leaves)),
+        ExprNode::Binary(op @ (BinaryOp::Sub | BinaryOp::Add), sum, root) => {
+            if let (ExprNode::Binary(BinaryOp::Add, f1, f2), ExprNode::Unary(UnaryOp::Sqrt, s)) =
+                (sum.node(), root.node())
+            {
+                if is_r_root_arg(s, f1, f2) {
+                    let (a, b) = (node(f1, leaves), node(f2, leaves));
+                    return if *op == BinaryOp::Sub {
+                        Node::And(a, b)
+                    } else {
+                        Node::Or(a, b)
+                    };
+                }
+            }
+            leaf(e, leaves)
+        }
+        _ => leaf(e, leaves),
+    }
+}
+
+fn leaf(e: &Expr, leaves: &mut Vec<(*const ExprNode, Tape)>) -> Node {
+    let key = e.node() as *const ExprNode;
+    if let Some(i) = leaves.iter().position(|(k, _)| *k == key) {
+        return Node::Leaf(i);
+    }
+    leaves.push((key, Tape::new(e)));
+    Node::Leaf(leaves.len() - 1)
+}
+
+/// Evaluates a [`Csg`] on boxes.
+pub struct CsgEval<'c> {
+    csg: &'c Csg,
+    evals: Vec<IntervalEval<'c>>,
+    memo: Vec<Option<Interval>>,
+}
+
+impl<'c> CsgEval<'c> {
+    pub fn new(csg: &'c Csg) -> Self {
+        CsgEval {
+            csg,
+            evals: csg.tapes.iter().map(IntervalEval::new).collect(),
+            memo: vec![None; csg.tapes.len()],
+        }
+    }
+
+    /// Bounds of a function with the model's signs over the box.
+    pub fn eval(&mut self, x: Interval, y: Interval, z: Interval) -> Interval {
+        self.memo.iter_mut().for_each(|m| *m = None);
+        self.node(&self.csg.root, [x, y, z])
+    }
+
+    fn node(&mut self, n: &Node, b: [Interval; 3]) -> Interval {
+        match n {
+            Node::Leaf(i) => {
+                if let Some(r) = self.memo[*i] {
+                    return r;
+                }
+                let r = self.evals[*i].eval(b[0], b[1], b[2]);
+                self.memo[*i] = Some(r);
+                r
+            }
+            // NaN in either argument makes the R-function NaN (outside).
+            Node::And(p, q) => {
+                let a = self.node(p, b);
+                // An empty argument makes the intersection empty, NaN or not.
+                if a.hi < 0.0 {
+                    return a;
+                }
+                let c = self.node(q, b);
+                a.min(c).with_nan(a.may_be_nan() || c.may_be_nan())
+            }
+            Node::Or(p, q) => {
+                let (a, c) = (self.node(p, b), self.node(q, b));
+                a.max(c).with_nan(a.may_be_nan() || c.may_be_nan())
+            }
+            Node::Not(p) => self.node(p, b).neg(),
+        }
+    }
+}

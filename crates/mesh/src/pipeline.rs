@@ -1,0 +1,369 @@
+//! The meshing pipeline, a group of z-slabs of bricks at a time, so output
+//! can leave for its sink (memory or disk) while the rest is being made and
+//! only three groups are held at once.
+//!
+//! A brick's triangles use vertices it owns and vertices owned by bricks
+//! above it in x, y or z (see [`crate::brick`]), so group `g`'s triangles
+//! use groups `g` and `g + 1` only, and a vertex of group `g` is used by
+//! triangles of groups `g - 1` and `g` only. Hence, once group `g + 1` is
+//! meshed: group `g`'s triangles get global indices and add their share of
+//! the volume correction to their corners (stage A); the shares of
+//! vertices owned by other bricks are added to their owners in brick order
+//! (B); group `g`'s vertices have seen all their triangles and take their
+//! final positions (C); and group `g - 1`'s triangles have all their
+//! vertices final (D). The output is the same as if the whole mesh had been
+//! made at once, whatever the group size, and the same on every run.
+
+use crate::brick::{mesh_brick, BrickMesh, Scratch};
+use crate::classify::BrickClass;
+use crate::correct::{accumulate, add, apply, Acc};
+use crate::sink::{MeshSink, VertexWindow};
+use crate::{MeshError, Plan};
+use microfrep_core::BatchEval;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A group's work after stage A, per brick.
+#[derive(Default)]
+struct Work {
+    /// Correction sums of the brick's owned vertices from its own triangles
+    /// (stage A) and from other bricks' triangles, added in brick order (B);
+    /// kept apart so the sums do not depend on how bricks are grouped.
+    acc: Vec<Acc>,
+    inbound: Vec<Acc>,
+    /// Foreign vertices as (owner brick, index among its owned vertices).
+    foreign: Vec<(u32, u32)>,
+    foreign_acc: Vec<Acc>,
+    /// Triangles in global vertex indices.
+    tris: Vec<[u32; 3]>,
+}
+
+/// Consecutive bricks `first..first + meshes.len()` (whole z-slabs).
+struct Group {
+    first: usize,
+    meshes: Vec<BrickMesh>,
+    /// Global index of each brick's first owned vertex.
+    offsets: Vec<u32>,
+    work: Vec<Work>,
+    /// Global index of the group's first vertex.
+    base: u32,
+    /// After stage C: the group's vertices in global order.
+    verts: Vec<[f32; 3]>,
+}
+
+impl Group {
+    fn holds(&self, brick: usize) -> bool {
+        (self.first..self.first + self.work.len()).contains(&brick)
+    }
+}
+
+/// A foreign vertex found in its owner: (owner brick, its local index,
+/// global index, position before correction).
+type Found = (u32, u32, u32, [f32; 3]);
+
+/// The read-only part of a group that stage A looks vertices up in.
+#[derive(Clone, Copy)]
+struct Owners<'a> {
+    first: usize,
+    meshes: &'a [BrickMesh],
+    offsets: &'a [u32],
+}
+
+impl Owners<'_> {
+    fn holds(&self, brick: usize) -> bool {
+        (self.first..self.first + self.meshes.len()).contains(&brick)
+    }
+}
+
+fn owners(g: &Group) -> Owners<'_> {
+    Owners {
+        first: g.first,
+        meshes: &g.meshes,
+        offsets: &g.offsets,
+    }
+}
+
+/// Finds the vertex on grid edge `key` in its owner brick, which must be in
+/// one of `groups`.
+fn find(plan: &Plan, groups: [Option<Owners>; 2], key: u64) -> Result<Found, MeshError> {
+    let grid = &plan.grid;
+    let owner = grid.brick_index(grid.owner_brick(grid.node_from_index(key / 8)));
+    let g = groups
+        .into_iter()
+        .flatten()
+        .find(|g| g.holds(owner))
+        .ok_or_else(|| {
+            MeshError::Internal(format!(
+                "grid edge {key} belongs to brick {owner}, outside the pipeline's window"
+            ))
+        })?;
+    let j = owner - g.first;
+    let m = &g.meshes[j];
+    match m.owned_keys.binary_search_by_key(&key, |&(k, _)| k) {
+        Ok(i) => {
+            let local = m.owned_keys[i].1;
+            Ok((
+                owner as u32,
+                local,
+                g.offsets[j] + local,
+                m.owned_pos[local as usize],
+            ))
+        }
+        Err(_) => Err(MeshError::Internal(format!(
+            "grid edge {key} is used by a brick but not made by its owner brick {owner}"
+        ))),
+    }
+}
+
+impl Plan {
+    /// Z-slabs of bricks per pipeline step: enough bricks per group to keep
+    /// every thread busy.
+    pub(crate) fn slabs_per_group(&self) -> usize {
+        let per_slab = self.grid.bricks[0] * self.grid.bricks[1];
+        let want = 4 * rayon::current_num_threads();
+        want.div_ceil(per_slab).clamp(1, self.grid.bricks[2])
+    }
+
+    /// Meshes bricks `range` (whole slabs), numbering owned vertices from
+    /// `*next_vertex` on.
+    fn mesh_group(
+        &self,
+        range: std::ops::Range<usize>,
+        next_vertex: &mut u64,
+        done: &AtomicUsize,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Group, MeshError> {
+        let first = range.start;
+        let meshes: Vec<BrickMesh> = range
+            .into_par_iter()
+            .map_init(
+                || Scratch::new(&self.tape, &self.csg, self.grid.brick),
+                |s, k| {
+                    if self.classes[k] != BrickClass::Surface {
+                        return BrickMesh::default();
+                    }
+                    let m = mesh_brick(&self.grid, &self.classes, self.grid.brick_coords(k), s);
+                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                    m
+                },
+            )
+            .collect();
+        let base = *next_vertex;
+        let mut offsets = Vec::with_capacity(meshes.len());
+        for m in &meshes {
+            offsets.push(*next_vertex as u32);
+            *next_vertex += m.owned_pos.len() as u64;
+        }
+        if *next_vertex > u32::MAX as u64 {
+            return Err(MeshError::TooLarge(format!(
+                "more than {} vertices do not fit 32-bit indices; lower the resolution",
+                u32::MAX
+            )));
+        }
+        let thin: usize = meshes.iter().map(|m| m.thin_cells).sum();
+        self.thin_cells.fetch_add(thin, Ordering::Relaxed);
+        let work = meshes
+            .iter()
+            .map(|m| Work {
+                inbound: vec![[0.0; 5]; m.owned_pos.len()],
+                ..Work::default()
+            })
+            .collect();
+        Ok(Group {
+            first,
+            meshes,
+            offsets,
+            work,
+            base: base as u32,
+            verts: Vec::new(),
+        })
+    }
+
+    /// Stage A for `g`: global triangles and correction sums; `next` is the
+    /// following group, if any.
+    fn stage_a(&self, g: &mut Group, next: Option<&Group>) -> Result<(), MeshError> {
+        let h = self.grid.h;
+        let Group {
+            meshes,
+            offsets,
+            work,
+            first,
+            ..
+        } = g;
+        let here = Owners {
+            first: *first,
+            meshes,
+            offsets,
+        };
+        let (meshes, offsets) = (here.meshes, here.offsets);
+        let lookup = |key: u64| find(self, [Some(here), next.map(owners)], key);
+        work.par_iter_mut().enumerate().try_for_each_init(
+            || {
+                (
+                    BatchEval::new(&self.tape),
+                    Vec::new(),
+                    Vec::new(),
+                    Vec::new(),
+                )
+            },
+            |(ev, pos, globals, acc): &mut (BatchEval, Vec<[f32; 3]>, Vec<u32>, Vec<Acc>),
+             (j, w)|
+             -> Result<(), MeshError> {
+                let m = &meshes[j];
+                if m.tris.is_empty() {
+                    return Ok(());
+                }
+                let owned = m.owned_pos.len();
+                pos.clear();
+                pos.extend_from_slice(&m.owned_pos);
+                globals.clear();
+                w.foreign.clear();
+                for &key in &m.foreign_keys {
+                    let (ob, ol, gi, p) = lookup(key)?;
+                    w.foreign.push((ob, ol));
+                    globals.push(gi);
+                    pos.push(p);
+                }
+                acc.clear();
+                acc.resize(pos.len(), [0.0; 5]);
+                accumulate(ev, pos, &m.tris, h, acc);
+                w.acc = acc[..owned].to_vec();
+                w.foreign_acc = acc[owned..].to_vec();
+                let off = offsets[j];
+                w.tris = m
+                    .tris
+                    .iter()
+                    .map(|t| {
+                        t.map(|v| {
+                            if (v as usize) < owned {
+                                off + v
+                            } else {
+                                globals[v as usize - owned]
+                            }
+                        })
+                    })
+                    .collect();
+                Ok(())
+            },
+        )
+    }
+}
+
+/// Stage B: adds the sums of `g`'s foreign vertices to their owners (in `g`
+/// or `next`), in brick order.
+fn stage_b(g: &mut Group, mut next: Option<&mut Group>) {
+    for j in 0..g.work.len() {
+        let foreign = std::mem::take(&mut g.work[j].foreign);
+        let sums = std::mem::take(&mut g.work[j].foreign_acc);
+        for (&(ob, ol), s) in foreign.iter().zip(&sums) {
+            let ob = ob as usize;
+            let target = if g.holds(ob) {
+                &mut g.work[ob - g.first]
+            } else {
+                let n = next.as_deref_mut().expect("stage A found the owner");
+                &mut n.work[ob - n.first]
+            };
+            add(&mut target.inbound[ol as usize], s);
+        }
+    }
+}
+
+/// Stage C: final positions of `g`'s vertices; frees what later stages do
+/// not need.
+fn stage_c(g: &mut Group) {
+    g.meshes
+        .par_iter_mut()
+        .zip(g.work.par_iter())
+        .for_each(|(m, w)| {
+            for ((p, a), b) in m.owned_pos.iter_mut().zip(&w.acc).zip(&w.inbound) {
+                let mut s = *a;
+                add(&mut s, b);
+                apply(p, &s);
+            }
+        });
+    let n: usize = g.meshes.iter().map(|m| m.owned_pos.len()).sum();
+    let mut verts = Vec::with_capacity(n);
+    for m in &g.meshes {
+        verts.extend_from_slice(&m.owned_pos);
+    }
+    g.verts = verts;
+    g.meshes = Vec::new();
+    for w in &mut g.work {
+        w.acc = Vec::new();
+        w.inbound = Vec::new();
+    }
+}
+
+fn emit_triangles(
+    sink: &mut (dyn MeshSink + Send),
+    g: &Group,
+    next: Option<&Group>,
+) -> Result<(), MeshError> {
+    let empty: &[[f32; 3]] = &[];
+    let window = VertexWindow {
+        runs: [
+            (g.base, &g.verts[..]),
+            next.map_or((u32::MAX, empty), |n| (n.base, &n.verts[..])),
+        ],
+    };
+    for w in &g.work {
+        sink.triangles(&w.tris, &window)?;
+    }
+    Ok(())
+}
+
+/// Runs the whole pipeline into `sink`. Each step finishes one group and
+/// hands its output to the sink on one thread while the others mesh the
+/// group after next.
+pub fn run(
+    plan: &Plan,
+    sink: &mut (dyn MeshSink + Send),
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(), MeshError> {
+    plan.thin_cells.store(0, Ordering::Relaxed);
+    let grid = &plan.grid;
+    let per_group = plan.slabs_per_group() * grid.bricks[0] * grid.bricks[1];
+    let total = grid.brick_count();
+    let done = AtomicUsize::new(0);
+    let mut next_vertex = 0u64;
+    let mut starts = (0..total).step_by(per_group);
+    let mut mesh_next = || -> Result<Option<Group>, MeshError> {
+        match starts.next() {
+            Some(s) => plan
+                .mesh_group(
+                    s..(s + per_group).min(total),
+                    &mut next_vertex,
+                    &done,
+                    progress,
+                )
+                .map(Some),
+            None => Ok(None),
+        }
+    };
+    let mut prev: Option<Group> = None;
+    let mut cur = mesh_next()?;
+    let mut next = mesh_next()?;
+    while let Some(mut g) = cur.take() {
+        plan.stage_a(&mut g, next.as_ref())?;
+        stage_b(&mut g, next.as_mut());
+        stage_c(&mut g);
+        let (emitted, after) = rayon::join(
+            || -> Result<(), MeshError> {
+                sink.vertices(&g.verts)?;
+                match &prev {
+                    Some(p) => emit_triangles(sink, p, Some(&g)),
+                    None => Ok(()),
+                }
+            },
+            &mut mesh_next,
+        );
+        emitted?;
+        prev = Some(g);
+        cur = next;
+        next = after?;
+    }
+    if let Some(p) = prev {
+        emit_triangles(sink, &p, None)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,123 @@
+//! Where the pipeline's output goes: vertices and triangles arrive in their
+//! final global order, a part at a time, so a mesh can be collected in
+//! memory or written to disk as it is made.
+
+use crate::{Mesh, MeshError};
+
+/// The vertices a batch of triangles may use: two consecutive runs of the
+/// global vertex numbering.
+pub struct VertexWindow<'a> {
+    pub runs: [(u32, &'a [[f32; 3]]); 2],
+}
+
+impl VertexWindow<'_> {
+    /// Position of global vertex `i` (which must lie in the window).
+    pub fn get(&self, i: u32) -> [f32; 3] {
+        let [(b0, v0), (b1, v1)] = self.runs;
+        if i >= b1 {
+            v1[(i - b1) as usize]
+        } else {
+            v0[(i - b0) as usize]
+        }
+    }
+}
+
+/// Receives a mesh in order: every vertex before any triangle that uses it,
+/// vertices and triangles each in their global order.
+pub trait MeshSink {
+    fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError>;
+    fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError>;
+}
+
+/// Collects the whole mesh in memory.
+#[derive(Default)]
+pub struct Collect {
+    pub mesh: Mesh,
+}
+
+impl MeshSink for Collect {
+    fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
+        self.mesh.vertices.extend_from_slice(v);
+        Ok(())
+    }
+
+    fn triangles(&mut self, t: &[[u32; 3]], _: &VertexWindow) -> Result<(), MeshError> {
+        self.mesh.triangles.extend_from_slice(t);
+        Ok(())
+    }
+}
+
+/// Counts and measures what passes through to an inner sink: the summary of
+/// a mesh that is never held whole.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tally {
+    pub vertices: u64,
+    pub triangles: u64,
+    /// Signed volume (divergence theorem) and area, f64 sums in order.
+    pub volume: f64,
+    pub area: f64,
+    /// Bounding box of the vertices (min, max).
+    pub bbox: [[f64; 3]; 2],
+}
+
+impl Default for Tally {
+    fn default() -> Self {
+        Tally {
+            vertices: 0,
+            triangles: 0,
+            volume: 0.0,
+            area: 0.0,
+            bbox: [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]],
+        }
+    }
+}
+
+/// Signed volume of the tetrahedron (origin, p, q, r) and area of (p, q, r).
+pub fn volume_area_of(t: [[f32; 3]; 3]) -> (f64, f64) {
+    let [p, q, r] = t.map(|v| v.map(|c| c as f64));
+    let e1 = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+    let e2 = [r[0] - p[0], r[1] - p[1], r[2] - p[2]];
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let area = 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let vol = (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0])
+        + p[2] * (q[0] * r[1] - q[1] * r[0]))
+        / 6.0;
+    (vol, area)
+}
+
+/// A sink that tallies and forwards to `inner`.
+pub struct Tallying<'a> {
+    pub inner: &'a mut (dyn MeshSink + Send),
+    pub tally: Tally,
+}
+
+impl MeshSink for Tallying<'_> {
+    fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
+        let [lo, hi] = &mut self.tally.bbox;
+        for p in v {
+            for ((l, h), &c) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
+                *l = l.min(c as f64);
+                *h = h.max(c as f64);
+            }
+        }
+        self.tally.vertices += v.len() as u64;
+        self.inner.vertices(v)
+    }
+
+    fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError> {
+        let (mut vol, mut area) = (0.0, 0.0);
+        for tri in t {
+            let (v, a) = volume_area_of(tri.map(|i| window.get(i)));
+            vol += v;
+            area += a;
+        }
+        self.tally.volume += vol;
+        self.tally.area += area;
+        self.tally.triangles += t.len() as u64;
+        self.inner.triangles(t, window)
+    }
+}
