@@ -14,6 +14,7 @@
 //! Sign convention everywhere: inside is `f >= 0`.
 
 pub mod eval;
+pub mod csg;
 pub mod expr;
 pub mod field;
 pub mod frep;

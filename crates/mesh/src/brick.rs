@@ -2,7 +2,7 @@
 //! tetrahedra over its cells, refinement of the vertices it owns.
 
 use crate::classify::{proven_sign, unproven_cells, BrickClass};
-use crate::csg::{Csg, CsgEval};
+use microfrep_core::csg::{Csg, CsgEval};
 use crate::grid::Grid;
 use crate::refine::{refine_edges, Edge};
 use crate::tets::cell_table;

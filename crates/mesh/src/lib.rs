@@ -28,7 +28,7 @@ mod brick;
 pub mod check;
 mod classify;
 pub mod correct;
-pub mod csg;
+pub use microfrep_core::csg;
 mod grid;
 pub mod memory;
 mod pipeline;

@@ -2,7 +2,7 @@
 //! interval-arithmetic root finding, cut-away views and section images.
 
 pub mod camera;
-pub mod csg;
+pub use microfrep_core::csg;
 mod error;
 pub mod image;
 pub mod section;

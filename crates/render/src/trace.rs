@@ -16,7 +16,7 @@
 //! them.
 
 use crate::camera::{Camera, V3};
-use crate::csg::{Csg, CsgEval};
+use microfrep_core::csg::{Csg, CsgEval};
 use microfrep_core::{BatchEval, Interval, IntervalEval, PointEval, Tape, BLOCK};
 
 /// Interval bounds of the model on boxes: plain, or through its set

@@ -8,10 +8,10 @@
 //! interval evaluation, and the nodes combine them with `min`, `max` and
 //! negation. The result bounds a function with the model's signs, not the
 //! model's values: use it for "empty" (`hi < 0`) and "solid" (`lo >= 0`)
-//! only. (The same module as `microfrep_render::csg`; it belongs in the
-//! core crate, where both could share it.)
+//! only. Shared by the mesher (brick classification, bounds) and the ray
+//! caster.
 
-use microfrep_core::{BinaryOp, Expr, ExprNode, Interval, IntervalEval, Tape, UnaryOp};
+use crate::{BinaryOp, Expr, ExprNode, Interval, IntervalEval, Tape, UnaryOp};
 
 enum Node {
     Leaf(usize),
@@ -67,6 +67,11 @@ impl Csg {
             root,
             tapes: leaves.into_iter().map(|(_, t)| t).collect(),
         }
+    }
+
+    /// Number of leaves (1 when no set operation was found).
+    pub fn leaves(&self) -> usize {
+        self.tapes.len()
     }
 }
 
