@@ -2,7 +2,7 @@
 //! al. Eqs. 4-6) and says which replicating function is safe on each axis.
 
 use crate::model;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
 use microfrep_structures::cell_report::{cell_report, AxisReport, CellReport};
 
@@ -32,24 +32,6 @@ pub struct CellArgs {
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
-fn parse_box(s: &str) -> Result<([f64; 3], [f64; 3])> {
-    let v: Vec<f64> = s
-        .split(',')
-        .enumerate()
-        .map(|(i, t)| {
-            t.trim()
-                .parse::<f64>()
-                .with_context(|| format!("--box: value {} ('{t}') is not a number", i + 1))
-        })
-        .collect::<Result<_>>()?;
-    if v.len() != 6 {
-        bail!(
-            "--box needs 6 numbers xmin,ymin,zmin,xmax,ymax,zmax, got {}",
-            v.len()
-        );
-    }
-    Ok(([v[0], v[1], v[2]], [v[3], v[4], v[5]]))
-}
 
 /// One line of advice for an axis.
 fn advice(a: &AxisReport) -> String {
@@ -111,7 +93,7 @@ fn to_json(r: &CellReport, min: [f64; 3], max: [f64; 3]) -> serde_json::Value {
 }
 
 pub fn run(a: CellArgs) -> Result<()> {
-    let (min, max) = parse_box(&a.cell_box)?;
+    let (min, max) = crate::boxarg::parse_box("--box", &a.cell_box)?;
     let opts = model::Options {
         object: a.object.clone(),
         params: a.params.clone(),

@@ -2,6 +2,7 @@
 //! model loading and printing only; the algorithms live in the crates.
 
 mod analyze_cmd;
+mod boxarg;
 mod cell_cmd;
 mod check_cmd;
 mod eval_cmd;

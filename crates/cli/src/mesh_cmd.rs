@@ -54,31 +54,16 @@ struct Summary {
     bbox: [[f64; 3]; 2],
 }
 
-fn parse_bounds(s: &str) -> Result<[[f64; 3]; 2]> {
-    let v: Vec<f64> = s
-        .split(',')
-        .enumerate()
-        .map(|(i, t)| {
-            t.trim()
-                .parse::<f64>()
-                .with_context(|| format!("--bounds: value {} ('{t}') is not a number", i + 1))
-        })
-        .collect::<Result<_>>()?;
-    if v.len() != 6 {
-        bail!(
-            "--bounds needs 6 numbers xmin,ymin,zmin,xmax,ymax,zmax, got {}",
-            v.len()
-        );
-    }
-    Ok([[v[0], v[1], v[2]], [v[3], v[4], v[5]]])
-}
 
 pub fn run(a: MeshArgs) -> Result<()> {
     let start = Instant::now();
     let format = Format::from_path(&a.output)?;
     let m = model::load(&a.model)?;
     let b = match &a.bounds {
-        Some(s) => parse_bounds(s)?,
+        Some(s) => {
+            let (lo, hi) = crate::boxarg::parse_box("--bounds", s)?;
+            [lo, hi]
+        }
         None => bounds::model_bounds_of(&m.expr).with_context(|| format!("model '{}'", a.model))?,
     };
     let resolution = match (a.resolution, a.voxel) {

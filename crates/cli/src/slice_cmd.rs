@@ -47,15 +47,7 @@ pub fn bounds(
     arg: Option<&str>,
 ) -> Result<([f64; 3], [f64; 3])> {
     if let Some(s) = arg {
-        let v: Vec<f64> = s
-            .split(',')
-            .map(|t| t.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .with_context(|| format!("--bounds '{s}': not a list of numbers"))?;
-        if v.len() != 6 {
-            bail!("--bounds '{s}': expected 6 numbers xmin,ymin,zmin,xmax,ymax,zmax");
-        }
-        return Ok(([v[0], v[1], v[2]], [v[3], v[4], v[5]]));
+        return crate::boxarg::parse_box("--bounds", s);
     }
     match microfrep_structures::examples::by_name(model) {
         Some(e) => Ok(e.bounds),

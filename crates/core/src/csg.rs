@@ -75,32 +75,54 @@ impl Csg {
     }
 }
 
-fn build(e: &Expr, leaves: &mut Vec<(*const ExprNode, Tape)>) -> Node {
-    let node = |a: &Expr, leaves: &mut Vec<_>| Box::new(build(a, leaves));
+/// One set operation read off an expression: the sign of an R-function
+/// intersection (union) with alpha in [-1, 1] is that of `min` (`max`) of
+/// its arguments, a positive constant factor keeps the solid, negation is
+/// the complement.
+pub enum SetOp<'e> {
+    And(&'e Expr, &'e Expr),
+    Or(&'e Expr, &'e Expr),
+    Same(&'e Expr),
+    Not(&'e Expr),
+}
+
+/// The set operation at the root of `e`, if it is one.
+pub fn set_op(e: &Expr) -> Option<SetOp<'_>> {
     match e.node() {
-        ExprNode::Binary(BinaryOp::Min, a, b) => Node::And(node(a, leaves), node(b, leaves)),
-        ExprNode::Binary(BinaryOp::Max, a, b) => Node::Or(node(a, leaves), node(b, leaves)),
+        ExprNode::Binary(BinaryOp::Min, a, b) => Some(SetOp::And(a, b)),
+        ExprNode::Binary(BinaryOp::Max, a, b) => Some(SetOp::Or(a, b)),
         ExprNode::Binary(BinaryOp::Div | BinaryOp::Mul, a, c) if positive_const(c) => {
-            build(a, leaves)
+            Some(SetOp::Same(a))
         }
-        ExprNode::Binary(BinaryOp::Mul, c, a) if positive_const(c) => build(a, leaves),
-        ExprNode::Unary(UnaryOp::Neg, a) => Node::Not(node(a, leaves)),
+        ExprNode::Binary(BinaryOp::Mul, c, a) if positive_const(c) => Some(SetOp::Same(a)),
+        ExprNode::Unary(UnaryOp::Neg, a) => Some(SetOp::Not(a)),
         ExprNode::Binary(op @ (BinaryOp::Sub | BinaryOp::Add), sum, root) => {
-            if let (ExprNode::Binary(BinaryOp::Add, f1, f2), ExprNode::Unary(UnaryOp::Sqrt, s)) =
+            let (ExprNode::Binary(BinaryOp::Add, f1, f2), ExprNode::Unary(UnaryOp::Sqrt, s)) =
                 (sum.node(), root.node())
-            {
-                if is_r_root_arg(s, f1, f2) {
-                    let (a, b) = (node(f1, leaves), node(f2, leaves));
-                    return if *op == BinaryOp::Sub {
-                        Node::And(a, b)
-                    } else {
-                        Node::Or(a, b)
-                    };
-                }
+            else {
+                return None;
+            };
+            if !is_r_root_arg(s, f1, f2) {
+                return None;
             }
-            leaf(e, leaves)
+            Some(if *op == BinaryOp::Sub {
+                SetOp::And(f1, f2)
+            } else {
+                SetOp::Or(f1, f2)
+            })
         }
-        _ => leaf(e, leaves),
+        _ => None,
+    }
+}
+
+fn build(e: &Expr, leaves: &mut Vec<(*const ExprNode, Tape)>) -> Node {
+    let mut node = |a: &Expr| Box::new(build(a, leaves));
+    match set_op(e) {
+        Some(SetOp::And(a, b)) => Node::And(node(a), node(b)),
+        Some(SetOp::Or(a, b)) => Node::Or(node(a), node(b)),
+        Some(SetOp::Same(a)) => build(a, leaves),
+        Some(SetOp::Not(a)) => Node::Not(node(a)),
+        None => leaf(e, leaves),
     }
 }
 

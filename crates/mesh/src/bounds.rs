@@ -10,7 +10,8 @@
 //! the faces of the combined box are then pushed in on the whole model.
 
 use crate::MeshError;
-use microfrep_core::{BinaryOp, Expr, ExprNode, Interval, IntervalEval, Tape, UnaryOp};
+use microfrep_core::csg::{set_op, SetOp};
+use microfrep_core::{Expr, ExprNode, Interval, IntervalEval, Tape};
 
 /// Half-width of the first box searched.
 const SEARCH: f64 = 1e4;
@@ -138,73 +139,6 @@ fn axes_used(e: &Expr) -> [bool; 3] {
     used
 }
 
-/// A set operation read off an expression.
-enum SetOp<'e> {
-    And(&'e Expr, &'e Expr),
-    Or(&'e Expr, &'e Expr),
-    /// The same solid (a positive constant factor).
-    Same(&'e Expr),
-}
-
-fn same(a: &Expr, b: &Expr) -> bool {
-    std::ptr::eq(a.node(), b.node())
-}
-
-fn positive_const(e: &Expr) -> bool {
-    e.as_const().is_some_and(|c| c > 0.0 && c.is_finite())
-}
-
-/// Whether `s` is the R-function root argument of `f1` and `f2`:
-/// `f1^2 + f2^2`, or that minus `c f1 f2` with |c| <= 2 (alpha in [-1, 1]).
-fn is_r_root_arg(s: &Expr, f1: &Expr, f2: &Expr) -> bool {
-    let squares = |e: &Expr| match e.node() {
-        ExprNode::Binary(BinaryOp::Add, a, b) => {
-            matches!((a.node(), b.node()),
-                (ExprNode::Unary(UnaryOp::Square, p), ExprNode::Unary(UnaryOp::Square, q))
-                    if same(p, f1) && same(q, f2))
-        }
-        _ => false,
-    };
-    match s.node() {
-        ExprNode::Binary(BinaryOp::Sub, sq, prod) if squares(sq) => match prod.node() {
-            ExprNode::Binary(BinaryOp::Mul, cf1, g2) if same(g2, f2) => match cf1.node() {
-                ExprNode::Binary(BinaryOp::Mul, c, g1) if same(g1, f1) => {
-                    c.as_const().is_some_and(|c| c.abs() <= 2.0)
-                }
-                _ => false,
-            },
-            _ => false,
-        },
-        _ => squares(s),
-    }
-}
-
-fn set_op(e: &Expr) -> Option<SetOp<'_>> {
-    match e.node() {
-        ExprNode::Binary(BinaryOp::Min, a, b) => Some(SetOp::And(a, b)),
-        ExprNode::Binary(BinaryOp::Max, a, b) => Some(SetOp::Or(a, b)),
-        ExprNode::Binary(BinaryOp::Div, a, c) if positive_const(c) => Some(SetOp::Same(a)),
-        ExprNode::Binary(BinaryOp::Mul, a, c) if positive_const(c) => Some(SetOp::Same(a)),
-        ExprNode::Binary(BinaryOp::Mul, c, a) if positive_const(c) => Some(SetOp::Same(a)),
-        ExprNode::Binary(op @ (BinaryOp::Sub | BinaryOp::Add), sum, root) => {
-            let (ExprNode::Binary(BinaryOp::Add, f1, f2), ExprNode::Unary(UnaryOp::Sqrt, s)) =
-                (sum.node(), root.node())
-            else {
-                return None;
-            };
-            if !is_r_root_arg(s, f1, f2) {
-                return None;
-            }
-            Some(if *op == BinaryOp::Sub {
-                SetOp::And(f1, f2)
-            } else {
-                SetOp::Or(f1, f2)
-            })
-        }
-        _ => None,
-    }
-}
-
 fn solid_box(e: &Expr) -> Result<SetBox, MeshError> {
     Ok(match set_op(e) {
         Some(SetOp::And(a, b)) => {
@@ -216,7 +150,7 @@ fn solid_box(e: &Expr) -> Result<SetBox, MeshError> {
         }
         Some(SetOp::Or(a, b)) => join(solid_box(a)?, solid_box(b)?),
         Some(SetOp::Same(a)) => solid_box(a)?,
-        None => leaf_box(e, &Tape::new(e))?,
+        Some(SetOp::Not(_)) | None => leaf_box(e, &Tape::new(e))?,
     })
 }
 

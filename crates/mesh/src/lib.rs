@@ -50,7 +50,7 @@ pub enum MeshError {
     TooLarge(String),
     #[error("internal meshing error: {0}")]
     Internal(String),
-    #[error("{path}: {source}")]
+    #[error("cannot write {path}")]
     Io {
         path: String,
         source: std::io::Error,
