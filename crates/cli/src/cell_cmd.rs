@@ -32,7 +32,6 @@ pub struct CellArgs {
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
-
 /// One line of advice for an axis.
 fn advice(a: &AxisReport) -> String {
     let saw = if a.sawtooth_safe() {

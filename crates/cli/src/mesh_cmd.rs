@@ -54,7 +54,6 @@ struct Summary {
     bbox: [[f64; 3]; 2],
 }
 
-
 pub fn run(a: MeshArgs) -> Result<()> {
     let start = Instant::now();
     let format = Format::from_path(&a.output)?;
