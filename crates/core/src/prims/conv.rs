@@ -36,7 +36,7 @@ fn check_segment(prim: &'static str, index: usize, b: &P3, e: &P3) -> Result<(),
 }
 
 /// The kernel integral of one segment from `b` to `e` at `p`.
-fn line_term(p: &P3, b: &P3, e: &P3, s: &Expr) -> Expr {
+pub fn line_term(p: &P3, b: &P3, e: &P3, s: &Expr) -> Expr {
     let be = sub(e, b);
     let l = norm2(&be).sqrt();
     let dir = [&be[0] / &l, &be[1] / &l, &be[2] / &l];
@@ -127,7 +127,7 @@ pub fn conv_line_r(
 
 /// One triangle's kernel integral. The vertices are relabelled (cyclic
 /// shift) so that `a1 a2` is the longest edge, with HyperFun's tie rules.
-fn triangle_term(p: &P3, tri: [&P3; 3], s: &Expr) -> Expr {
+pub fn triangle_term(p: &P3, tri: [&P3; 3], s: &Expr) -> Expr {
     let len = |a: &P3, b: &P3| norm2(&sub(b, a)).sqrt();
     let (l0, l1, l2) = (
         len(tri[0], tri[1]),

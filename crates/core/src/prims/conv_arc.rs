@@ -18,7 +18,9 @@ fn atanh(v: &Expr) -> Expr {
 
 /// Kernel integral of an arc of radius `r` and opening `th` (radians) lying
 /// in the local xy plane from the +x axis, at the local point `(x, y, z)`.
-fn arc_term(q: &P3, r: &Expr, s: &Expr, th: &Expr) -> Expr {
+/// Shared with the HyperFun library, which adds the reference's write-back
+/// of its arguments around it.
+pub fn arc_term(q: &P3, r: &Expr, s: &Expr, th: &Expr) -> Expr {
     let [x, y, z] = q;
     let s2 = s.square();
     let a = 2.0 * r * &s2;

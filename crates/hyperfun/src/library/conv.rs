@@ -16,9 +16,6 @@ fn sub(a: &V3, b: &V3) -> V3 {
 fn dot(a: &V3, b: &V3) -> Expr {
     &a[0] * &b[0] + &a[1] * &b[1] + &a[2] * &b[2]
 }
-fn scale(a: &V3, k: &Expr) -> V3 {
-    [&a[0] * k, &a[1] * k, &a[2] * k]
-}
 fn p3(p: &[Expr]) -> V3 {
     [p[0].clone(), p[1].clone(), p[2].clone()]
 }
@@ -35,22 +32,9 @@ fn conv_point(a: &[Arg]) -> Output {
     }))
 }
 
-/// Kernel integral over the segment `b -> e` with width `s`.
+/// Kernel integral over the segment `b -> e` with width `s` (the core's).
 fn segment(p: &V3, b: &V3, e: &V3, s: &Expr) -> Expr {
-    let axis = sub(e, b);
-    let l = dot(&axis, &axis).sqrt();
-    let u = scale(&axis, &(1.0 / &l));
-    let d = sub(p, b);
-    let t = dot(&d, &u);
-    let s2 = s.square();
-    let d2 = dot(&d, &d);
-    let pp2 = 1.0 + &s2 * (&d2 - t.square());
-    let q2 = 1.0 + &s2 * (&d2 + l.square() - 2.0 * &l * &t);
-    let pp = pp2.sqrt();
-    let lt = &l - &t;
-    &t / (2.0 * &pp2 * (&pp2 + &s2 * t.square()))
-        + &lt / (2.0 * &pp2 * &q2)
-        + ((s * &t / &pp).atan() + (s * &lt / &pp).atan()) / (2.0 * s * pp.powi(3))
+    microfrep_core::prims::line_term(p, b, e, s)
 }
 
 fn conv_line(a: &[Arg]) -> Output {
@@ -99,68 +83,10 @@ fn conv_line_r(a: &[Arg]) -> Output {
     }))
 }
 
-/// Kernel integral over one triangle (vertices relabelled so that a1-a2 is
-/// the longest edge, by cyclic shift).
+/// Kernel integral over one triangle (the core's, which relabels the
+/// vertices so that the first edge is the longest, as the reference does).
 fn triangle(p: &V3, v: [V3; 3], s: &Expr) -> Expr {
-    let len2 = |a: &V3, b: &V3| {
-        let d = sub(a, b);
-        dot(&d, &d)
-    };
-    let (e01, e12, e20) = (len2(&v[0], &v[1]), len2(&v[1], &v[2]), len2(&v[2], &v[0]));
-    // Three cyclic labellings; pick the one whose first edge is longest.
-    let pick = |k: usize| {
-        [
-            v[k % 3].clone(),
-            v[(k + 1) % 3].clone(),
-            v[(k + 2) % 3].clone(),
-        ]
-    };
-    let first = e01.ge(&e12).and(e01.ge(&e20));
-    let second = e12.ge(&e20);
-    let sel = |x: &V3, y: &V3, z: &V3| -> V3 {
-        [0, 1, 2].map(|i| {
-            Expr::select(
-                first.clone(),
-                x[i].clone(),
-                Expr::select(second.clone(), y[i].clone(), z[i].clone()),
-            )
-        })
-    };
-    let (l0, l1, l2) = (pick(0), pick(1), pick(2));
-    let a1 = sel(&l0[0], &l1[0], &l2[0]);
-    let a2 = sel(&l0[1], &l1[1], &l2[1]);
-    let a3 = sel(&l0[2], &l1[2], &l2[2]);
-    let edge = sub(&a2, &a1);
-    let el2 = dot(&edge, &edge);
-    let tb = dot(&sub(&a3, &a1), &edge) / &el2;
-    let b: V3 = [0, 1, 2].map(|i| &a1[i] + &tb * &edge[i]);
-    let norm = |w: &V3| dot(w, w).sqrt();
-    let (ub, vb) = (sub(&a2, &b), sub(&a3, &b));
-    let (e2, h) = (norm(&ub), norm(&vb));
-    let u = scale(&ub, &(1.0 / &e2));
-    let vv = scale(&vb, &(1.0 / &h));
-    let e1 = norm(&sub(&a1, &b));
-    let d = sub(p, &b);
-    let (uc, vc) = (dot(&d, &u), dot(&d, &vv));
-    let g = &vc - &h;
-    let m = &e2 * &g + &uc * &h;
-    let k = &uc * &h - &e1 * &g;
-    let c2 = 1.0 / s.square() + dot(&d, &d) - uc.square();
-    let q = &c2 - vc.square();
-    let w = &c2 - 2.0 * &vc * &h + h.square();
-    let hq = h.square() * (&q + uc.square());
-    let a2s = e1.square() * &w + &hq - 2.0 * &e1 * &h * &uc * &g;
-    let b2s = e2.square() * &w + &hq + 2.0 * &e2 * &h * &uc * &g;
-    let n1 = &e1 + &uc;
-    let n2 = &e2 - &uc;
-    let n3 = &e1 * &n1 + &vc * &h;
-    let n4 = -(&e1 * &uc) - &g * &h;
-    let n5 = -(&e2 * &n2) - &vc * &h;
-    let n6 = -(&e2 * &uc) + &g * &h;
-    let (ra, rb, rc) = (a2s.sqrt(), b2s.sqrt(), c2.sqrt());
-    let part =
-        |coef: Expr, x: Expr, y: Expr, r: &Expr| coef * ((x / r).atan() + (y / r).atan()) / r;
-    (part(k, n3, n4, &ra) + part(m, n5, n6, &rb) + part(vc.clone(), n1, n2, &rc)) / (2.0 * q * s)
+    microfrep_core::prims::triangle_term(p, [&v[0], &v[1], &v[2]], s)
 }
 
 fn conv_triangle(a: &[Arg]) -> Output {

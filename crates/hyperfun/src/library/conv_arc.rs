@@ -11,31 +11,10 @@ use microfrep_core::Expr;
 #[allow(clippy::approx_constant)]
 const PI: f64 = 3.141592;
 
-/// `atanh(v) = ln((1 + v)/(1 - v))/2`.
-fn atanh(v: &Expr) -> Expr {
-    ((1.0 + v) / (1.0 - v)).ln() / 2.0
-}
-
-/// Kernel integral of an arc of radius `r` and opening `th` (radians) in the
-/// xy plane, at the local point (x, y, z).
+/// The arc kernel integral of the core (`microfrep_core::prims::arc_term`)
+/// with the argument order used here.
 fn arc(x: &Expr, y: &Expr, z: &Expr, r: &Expr, th: &Expr, s: &Expr) -> Expr {
-    let s2 = s.square();
-    let a = 2.0 * r * &s2;
-    let d2 = x.square() + y.square() + z.square();
-    let b = 1.0 + r.square() * &s2 + &s2 * &d2;
-    let p2 = -(r.powi(4) * s2.square())
-        + 2.0 * r.square() * &s2 * (&s2 * (&d2 - 2.0 * z.square()) - 1.0)
-        - (1.0 + &s2 * &d2).square();
-    let p1 = p2.abs().sqrt();
-    let p3 = &p1 * &p2;
-    let f1 = &b * y / (x * &p2 * (&a * x - &b))
-        + (&a * (x.square() + y.square()) * th.sin() - &b * y)
-            / (x * &p2 * (&a * (x * th.cos() + y * th.sin()) - &b));
-    let t2 = (th / 2.0).tan();
-    let axb = &a * x + &b;
-    let neg = 2.0 * &b * ((-(&a * y) / &p1).atan() + ((&a * y - &axb * &t2) / &p1).atan()) / &p3;
-    let pos = 2.0 * &b * (atanh(&(&a * y / &p1)) + atanh(&((&axb * &t2 - &a * y) / &p1))) / &p3;
-    f1 + Expr::select(p2.lt(0.0), neg, pos)
+    microfrep_core::prims::arc_term(&[x.clone(), y.clone(), z.clone()], r, s, th)
 }
 
 fn conv_arc(a: &[Arg]) -> Output {
