@@ -1,6 +1,10 @@
-//! Area of the zero set of the linear interpolant inside a tetrahedron: a
-//! triangle (1-3 sign split) or a planar quadrilateral (2-2 split), with its
-//! vertices on the tetrahedron's edges.
+//! Area of the zero set inside a tetrahedron: a triangle (1-3 sign split)
+//! or a quadrilateral (2-2 split), with its vertices on the tetrahedron's
+//! edges, either where the linear interpolant of the vertex values is zero
+//! or at any other points on those edges (the field's refined roots). The
+//! polygon and the part of the tetrahedron on its inside are then a
+//! polytope whose volume and area are taken exactly; a quadrilateral that
+//! is not planar is taken as the mean of its two triangulations.
 
 /// The zero-set polygon of a tetrahedron: `n` (0, 3 or 4) vertices, each on
 /// the edge `(i, j)` at parameter `t` from `i`, in cyclic order.
@@ -13,10 +17,11 @@ pub struct IsoPolygon {
 }
 
 impl IsoPolygon {
-    /// Fraction of the tetrahedron's volume where the interpolant is
-    /// `>= 0`. With one vertex apart (1-3 split) its corner tetrahedron is
-    /// cut at the polygon's vertices; with two on each side (2-2) the
-    /// positive part is a prism, three tetrahedra.
+    /// Fraction of the tetrahedron's volume on the inside of the polygon.
+    /// With one vertex apart (1-3 split) its corner tetrahedron is cut at
+    /// the polygon's vertices; with two on each side (2-2) the inside part
+    /// is a wedge, three tetrahedra, whose volume depends on the diagonal
+    /// of the quadrilateral unless it is planar: the mean of both.
     pub fn inside_fraction(&self) -> f64 {
         let t = |k: usize| self.verts[k].2;
         match (self.n, self.inside) {
@@ -27,7 +32,10 @@ impl IsoPolygon {
             _ => {
                 // Vertices ac, bc, bd, ad (a, b inside).
                 let (t1, t3, t4, t2) = (t(0), t(1), t(2), t(3));
-                t1 * t2 + t1 * t4 * (1.0 - t2) + t3 * t4 * (1.0 - t1)
+                // Diagonal ac-bd, then ad-bc.
+                let v1 = t1 * t2 + t1 * t4 * (1.0 - t2) + t3 * t4 * (1.0 - t1);
+                let v2 = t1 * t2 + t2 * t3 * (1.0 - t1) + t3 * t4 * (1.0 - t2);
+                0.5 * (v1 + v2)
             }
         }
     }
@@ -49,9 +57,14 @@ impl IsoPolygon {
             std::array::from_fn(|a| p[i][a] + t * (p[j][a] - p[i][a]))
         });
         match self.n {
-            3 => 0.5 * norm(cross(sub(v[1], v[0]), sub(v[2], v[0]))),
-            // Planar quadrilateral: half the cross product of the diagonals.
-            4 => 0.5 * norm(cross(sub(v[2], v[0]), sub(v[3], v[1]))),
+            3 => tri(v[0], v[1], v[2]),
+            // The mean of the two triangulations (equal when planar).
+            4 => {
+                0.5 * (tri(v[0], v[1], v[2])
+                    + tri(v[0], v[2], v[3])
+                    + tri(v[0], v[1], v[3])
+                    + tri(v[1], v[2], v[3]))
+            }
             _ => 0.0,
         }
     }
@@ -59,9 +72,16 @@ impl IsoPolygon {
 
 /// The zero set of the linear interpolant of `f` (inside is `f >= 0`).
 pub fn iso_polygon(f: [f64; 4]) -> IsoPolygon {
+    iso_polygon_cut(f, |i, j| f[i] / (f[i] - f[j]))
+}
+
+/// The zero-set polygon for the signs of `f`, with its vertex on the edge
+/// from vertex `i` (inside) to `j` (outside), or from outside to inside, at
+/// parameter `cut(i, j)` from `i`, in `[0, 1]`.
+pub fn iso_polygon_cut(f: [f64; 4], cut: impl Fn(usize, usize) -> f64) -> IsoPolygon {
     let pos = f.map(|v| v >= 0.0);
     let n = pos.iter().filter(|&&p| p).count();
-    let cut = |i: usize, j: usize| (i, j, f[i] / (f[i] - f[j]));
+    let cut = |i: usize, j: usize| (i, j, cut(i, j));
     let mut verts = [(0, 0, 0.0); 4];
     match n {
         1 | 3 => {
@@ -94,6 +114,10 @@ pub fn iso_polygon(f: [f64; 4]) -> IsoPolygon {
             verts,
         },
     }
+}
+
+fn tri(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    0.5 * norm(cross(sub(b, a), sub(c, a)))
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -142,5 +166,67 @@ mod tests {
         // (s sqrt 2) x (1 - s) tilted... area s (1 - s) sqrt 2.
         let a = poly.area(&UNIT);
         assert!((a - 0.25 * 2f64.sqrt()).abs() < 1e-12, "{a}");
+    }
+
+    /// Volume of a closed, consistently oriented triangle surface.
+    fn enclosed(tris: &[[[f64; 3]; 3]]) -> f64 {
+        tris.iter()
+            .map(|[a, b, c]| {
+                let n = cross(*b, *c);
+                a[0] * n[0] + a[1] * n[1] + a[2] * n[2]
+            })
+            .sum::<f64>()
+            / 6.0
+    }
+
+    #[test]
+    fn cuts_away_from_the_linear_roots_bound_a_polytope() {
+        // Vertices 0, 1 inside, 2, 3 outside, cut anywhere on the four
+        // edges: the inside part is a wedge whose cut face is not planar.
+        // Its volume from its boundary, for either diagonal of that face,
+        // averaged, is the fraction (the tetrahedron's volume is 1/6).
+        let [a, b, c, d] = UNIT;
+        let at = |p: [f64; 3], q: [f64; 3], t: f64| -> [f64; 3] {
+            std::array::from_fn(|k| p[k] + t * (q[k] - p[k]))
+        };
+        for ts in [
+            [0.3, 0.8, 0.55, 0.1],
+            [0.5, 0.5, 0.5, 0.5],
+            [0.9, 0.05, 0.7, 0.35],
+        ] {
+            let cut = |i: usize, j: usize| match (i, j) {
+                (0, 2) => ts[0],
+                (1, 2) => ts[1],
+                (1, 3) => ts[2],
+                _ => ts[3],
+            };
+            let poly = iso_polygon_cut([1.0, 1.0, -1.0, -1.0], cut);
+            let (ac, bc, bd, ad) = (
+                at(a, c, ts[0]),
+                at(b, c, ts[1]),
+                at(b, d, ts[2]),
+                at(a, d, ts[3]),
+            );
+            let sides = [
+                [a, ac, bc],
+                [a, bc, b],
+                [a, b, bd],
+                [a, bd, ad],
+                [a, ad, ac],
+                [b, bc, bd],
+            ];
+            let with = |cap: [[[f64; 3]; 3]; 2]| {
+                let mut all = sides.to_vec();
+                all.extend(cap);
+                6.0 * enclosed(&all).abs()
+            };
+            let v1 = with([[ac, ad, bd], [ac, bd, bc]]);
+            let v2 = with([[ac, ad, bc], [ad, bd, bc]]);
+            let f = poly.inside_fraction();
+            assert!(
+                (f - 0.5 * (v1 + v2)).abs() < 1e-12,
+                "{ts:?}: {f} vs {v1}, {v2}"
+            );
+        }
     }
 }

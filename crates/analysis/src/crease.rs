@@ -1,7 +1,8 @@
 //! Crease detection and refinement for [`crate::measure`]: the centre
 //! samples of surface cells, the test that tells a crease (min, max,
-//! R-function edge) or unresolved curvature from a smooth surface, and the
-//! halving of a cell into eight sampled children.
+//! R-function edge) or unresolved curvature from a smooth surface, the
+//! halving of a cell into eight sampled children, and the refinement of the
+//! zero crossings on the cells' edges to roots of the field ([`roots`]).
 
 use crate::grid::Grid;
 use crate::measure::{cell, Ctx};
@@ -176,4 +177,113 @@ pub(crate) fn creased(v: &[f64; 8], center: f64) -> bool {
         .fold(0.0, f64::max);
     let residual = corners.max((center - mean).abs());
     residual.is_nan() || residual > KINK * change
+}
+
+/// Illinois steps (each one batch evaluation of every segment) that refine
+/// a zero crossing after its linear estimate.
+pub(crate) const ROOT_STEPS: usize = 3;
+
+/// A segment from `a` to `a + d` with field values `fa` and `fb` at its
+/// ends, of opposite signs (`fa >= 0` or `fb >= 0`, not both).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Seg {
+    pub(crate) a: [f64; 3],
+    pub(crate) d: [f64; 3],
+    pub(crate) fa: f64,
+    pub(crate) fb: f64,
+}
+
+/// The parameter in `[0, 1]` from `a` where the solid's field (the
+/// region's with `region`) changes sign on each segment: the linear
+/// estimate refined by [`ROOT_STEPS`] steps of the Illinois method, every
+/// step one batch evaluation of all the segments. Where the field is
+/// linear the first estimate is its root already; elsewhere the bracket
+/// keeps the result on the segment, and between samples of opposite signs.
+///
+/// `slope` gets the field's derivative in the parameter at each root: the
+/// secant from the root to the first estimate, or across the segment where
+/// that estimate was already on the root.
+pub(crate) fn roots(
+    ctx: &mut Ctx,
+    region: bool,
+    segs: &[Seg],
+    out: &mut Vec<f64>,
+    slope: &mut Vec<f64>,
+) {
+    // Bracket (t_lo, f_lo, t_hi, f_hi) and the side kept last (-1, 0, 1).
+    let mut br: Vec<([f64; 4], i8)> = segs.iter().map(|s| ([0.0, s.fa, 1.0, s.fb], 0)).collect();
+    let secant = |b: &[f64; 4]| {
+        let t = b[0] + (b[2] - b[0]) * b[1] / (b[1] - b[3]);
+        if t.is_finite() {
+            t.clamp(b[0], b[2])
+        } else {
+            0.5 * (b[0] + b[2])
+        }
+    };
+    let mut v = std::mem::take(&mut ctx.s.root_vals);
+    let evaluates = if region {
+        ctx.with_region
+    } else {
+        ctx.eval_solid
+    };
+    let steps = if evaluates { ROOT_STEPS } else { 0 };
+    // The first estimate and the field there.
+    let mut first: Vec<(f64, f64)> = Vec::new();
+    for step in 0..steps {
+        let s = &mut *ctx.s;
+        s.xs.clear();
+        s.ys.clear();
+        s.zs.clear();
+        out.clear();
+        for (seg, (b, _)) in segs.iter().zip(&br) {
+            let t = secant(b);
+            out.push(t);
+            s.xs.push((seg.a[0] + t * seg.d[0]) as f32);
+            s.ys.push((seg.a[1] + t * seg.d[1]) as f32);
+            s.zs.push((seg.a[2] + t * seg.d[2]) as f32);
+        }
+        v.clear();
+        v.resize(segs.len(), 0.0);
+        let ev = if region {
+            s.region_ev.as_mut()
+        } else {
+            Some(&mut s.solid_ev)
+        };
+        if let Some(ev) = ev {
+            ev.eval(&s.xs, &s.ys, &s.zs, &mut v);
+        }
+        no_nan(&mut v);
+        if step == 0 {
+            first.extend(out.iter().zip(v.iter()).map(|(&t, &fv)| (t, fv as f64)));
+        }
+        for ((b, last), (&t, &fv)) in br.iter_mut().zip(out.iter().zip(v.iter())) {
+            let fv = fv as f64;
+            if (fv >= 0.0) == (b[1] >= 0.0) {
+                b[0] = t;
+                b[1] = fv;
+                if *last == -1 {
+                    b[3] *= 0.5;
+                }
+                *last = -1;
+            } else {
+                b[2] = t;
+                b[3] = fv;
+                if *last == 1 {
+                    b[1] *= 0.5;
+                }
+                *last = 1;
+            }
+        }
+    }
+    ctx.s.root_vals = v;
+    out.clear();
+    out.extend(br.iter().map(|(b, _)| secant(b)));
+    slope.clear();
+    for (k, (&t, s)) in out.iter().zip(segs).enumerate() {
+        let chord = s.fb - s.fa;
+        slope.push(match first.get(k) {
+            Some(&(t1, f1)) if (t1 - t).abs() > 1e-3 && f1.is_finite() => f1 / (t1 - t),
+            _ => chord,
+        });
+    }
 }
