@@ -1,6 +1,8 @@
 //! Volume fraction by sampling: the solid's share (`f >= 0`) of sample
 //! points in a box, either the centres of an `n^3` grid of cells or a
-//! quasi-random point set.
+//! quasi-random point set; and, accurate to far below a point count's
+//! error, the volume of a field's sublevel sets from its grid node values
+//! ([`LevelField`], module `levels`).
 //!
 //! The quasi-random set is Roberts' R3 Kronecker sequence `frac(i alpha)`.
 //! Its low discrepancy avoids the aliasing of a regular grid with periodic
@@ -10,6 +12,11 @@
 use crate::error::{check_box, check_resolution, Error, Result};
 use microfrep_core::{BatchEval, Expr, Tape, BLOCK};
 use rayon::prelude::*;
+
+mod cells;
+mod levels;
+pub use cells::tet_fraction;
+pub use levels::{LevelField, MAX_CELLS};
 
 /// Largest accepted number of sample points (memory: 12 bytes a point).
 pub const MAX_POINTS: usize = 1 << 24;
@@ -137,4 +144,57 @@ pub fn volume_fraction(f: &Expr, min: [f64; 3], max: [f64; 3], n: usize) -> Resu
 /// Volume fraction of `f` in `[min, max]` on `count` quasi-random points.
 pub fn volume_fraction_qmc(f: &Expr, min: [f64; 3], max: [f64; 3], count: usize) -> Result<f64> {
     Samples::quasi_random(min, max, count)?.fraction(&Tape::new(f), &[])
+}
+
+/// The values of the tape (parameters `(index, value)` set) at the nodes
+/// of a grid of `n` cells per axis on `[min, max]`, for sublevel volumes;
+/// evaluated in f32 batches, z layers in parallel.
+pub fn sample_levels(
+    tape: &Tape,
+    params: &[(usize, f64)],
+    min: [f64; 3],
+    max: [f64; 3],
+    n: usize,
+) -> Result<LevelField> {
+    check_box(min, max)?;
+    check_resolution("level grid cells per axis", n, 2, MAX_CELLS)?;
+    let r = n + 1;
+    let c = |a: usize, i: usize| (min[a] + (max[a] - min[a]) * i as f64 / n as f64) as f32;
+    let mut vals = vec![0.0f32; r * r * r];
+    vals.par_chunks_mut(r * r).enumerate().for_each_init(
+        || {
+            let mut ev = BatchEval::new(tape);
+            for &(i, v) in params {
+                ev.set_param(i, v);
+            }
+            let xs: Vec<f32> = (0..r * r).map(|q| c(0, q % r)).collect();
+            let ys: Vec<f32> = (0..r * r).map(|q| c(1, q / r)).collect();
+            (ev, xs, ys)
+        },
+        |(ev, xs, ys), (k, layer)| {
+            let zs = vec![c(2, k); r * r];
+            ev.eval(xs, ys, &zs, layer);
+        },
+    );
+    // Node coordinates of a bad value, mapped from the unit grid to the box.
+    LevelField::from_values(n, vals).map_err(|e| match e {
+        Error::NotFinite { value, x, y, z } => {
+            let m = |a: usize, u: f64| min[a] + (max[a] - min[a]) * u;
+            Error::NotFinite {
+                value,
+                x: m(0, x),
+                y: m(1, y),
+                z: m(2, z),
+            }
+        }
+        e => e,
+    })
+}
+
+/// Volume fraction of `f >= 0` in `[min, max]` from the linear interpolant
+/// of its values on a grid of `n` (even) cells per axis, extrapolated from
+/// the grids of `n` and `n / 2` cells (see [`LevelField`]).
+pub fn volume_fraction_fine(f: &Expr, min: [f64; 3], max: [f64; 3], n: usize) -> Result<f64> {
+    let tape = Tape::new(&(-f));
+    Ok(sample_levels(&tape, &[], min, max, n)?.fraction_below(0.0))
 }

@@ -2,12 +2,14 @@
 //! solved once per process (on first use) and cached.
 //!
 //! Each table holds the level (or strut radius, in cell units) solved by
-//! bisection on quasi-random samples of one unit cell at a ladder of
-//! densities that includes 0.1, 0.2, 0.3 and 0.5; a density field becomes a
-//! level field by piecewise-linear interpolation between them, so those
-//! tabulated densities are hit to the solver's tolerance.
+//! bisection on one sampling of the unit cell's field on a grid (see
+//! `microfrep_structures::density::DensitySolver`, accurate to about 1e-4
+//! relative) at a ladder of densities that includes 0.1, 0.2, 0.3 and 0.5;
+//! a density field becomes a level field by piecewise-linear interpolation
+//! between them, so those tabulated densities are hit to the solver's
+//! accuracy.
 
-use microfrep_structures::density::{strut_radius, tpms_level, LevelTable};
+use microfrep_structures::density::{DensitySolver, LevelTable, STRUT_CELLS, TPMS_CELLS};
 use microfrep_structures::struts::StrutLattice;
 use microfrep_structures::tpms::{Solid, Tpms};
 use microfrep_structures::Error;
@@ -19,10 +21,6 @@ pub const DENSITIES: [f64; 22] = [
     0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8,
     0.85, 0.9, 0.95, 0.97, 0.98,
 ];
-/// Quasi-random samples per solve: enough for 0.5 % at density 0.1 on an
-/// independent sample (20 000 points gave up to 1 %).
-pub const TPMS_SAMPLES: usize = 200_000;
-pub const STRUT_SAMPLES: usize = 80_000;
 
 type Cache = Mutex<HashMap<(u8, u8), Result<LevelTable, String>>>;
 
@@ -40,8 +38,8 @@ fn cached(
 pub fn tpms_table(kind: Tpms, solid: Solid) -> Result<LevelTable, String> {
     let k = Tpms::ALL.iter().position(|t| *t == kind).unwrap_or(0) as u8;
     cached((k, 1 + (solid == Solid::Sheet) as u8), || {
-        LevelTable::build(&DENSITIES, |d| tpms_level(kind, solid, d, TPMS_SAMPLES))
-            .map_err(|e| e.to_string())
+        let solver = DensitySolver::tpms(kind, solid, TPMS_CELLS).map_err(|e| e.to_string())?;
+        LevelTable::build(&DENSITIES, |d| solver.solve(d)).map_err(|e| e.to_string())
     })
 }
 
@@ -53,9 +51,10 @@ pub fn strut_table(kind: StrutLattice) -> Result<LevelTable, String> {
         .position(|t| *t == kind)
         .unwrap_or(0) as u8;
     cached((k, 0), || {
+        let solver = DensitySolver::struts(kind, STRUT_CELLS).map_err(|e| e.to_string())?;
         let (mut ds, mut rs) = (Vec::new(), Vec::new());
         for d in DENSITIES {
-            match strut_radius(kind, d, STRUT_SAMPLES) {
+            match solver.solve(d) {
                 Ok(r) => {
                     ds.push(d);
                     rs.push(r);

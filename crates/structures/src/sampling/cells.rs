@@ -1,0 +1,186 @@
+//! The cells of a node grid (or of its every-other-node coarsening) and the
+//! sublevel volume of the linear interpolant on their Kuhn tetrahedra.
+
+use rayon::prelude::*;
+
+/// Cells summed per task: fixed, so sums are deterministic.
+pub(super) const CHUNK: usize = 4096;
+
+/// The six tetrahedra of the Kuhn split, as corner bit masks (bit `a` set =
+/// far side on axis `a`): each is a monotone path from corner 0 to corner 7.
+const TETS: [[usize; 4]; 6] = [
+    [0, 1, 3, 7],
+    [0, 1, 5, 7],
+    [0, 2, 3, 7],
+    [0, 2, 6, 7],
+    [0, 4, 5, 7],
+    [0, 4, 6, 7],
+];
+
+/// One of the two grids: cells of `stride` node spacings.
+pub(super) struct Level<'a> {
+    g: &'a [f32],
+    /// Node index offset of each of the eight corners.
+    corner: [usize; 8],
+    /// Cells per axis on this level.
+    m: usize,
+    /// Node row length `n + 1`.
+    row: usize,
+    stride: usize,
+}
+
+impl<'a> Level<'a> {
+    /// The cells of `stride` (1 or 2) node spacings of the grid of `n`
+    /// cells per axis with node values `g`.
+    pub(super) fn new(g: &'a [f32], n: usize, stride: usize) -> Level<'a> {
+        let row = n + 1;
+        let corner = std::array::from_fn(|c| {
+            stride * ((c & 1) + row * ((c >> 1) & 1) + row * row * ((c >> 2) & 1))
+        });
+        Level {
+            g,
+            corner,
+            m: n / stride,
+            row,
+            stride,
+        }
+    }
+
+    /// Cells per axis.
+    pub(super) fn cells(&self) -> usize {
+        self.m
+    }
+
+    /// Node index of the low corner of cell `q` (x fastest).
+    pub(super) fn base(&self, q: usize) -> usize {
+        let m = self.m;
+        let (i, j, k) = (q % m, (q / m) % m, q / (m * m));
+        self.stride * (i + self.row * (j + self.row * k))
+    }
+
+    fn corners(&self, base: usize) -> [f64; 8] {
+        self.corner.map(|o| self.g[base + o] as f64)
+    }
+
+    fn bounds(&self, base: usize) -> (f64, f64) {
+        self.corners(base)
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            })
+    }
+
+    /// Fraction of the cell where the interpolant is `<= t`.
+    pub(super) fn cell_fraction(&self, base: usize, t: f64) -> f64 {
+        let u = self.corners(base).map(|g| t - g);
+        if u.iter().all(|&v| v >= 0.0) {
+            return 1.0;
+        }
+        if u.iter().all(|&v| v < 0.0) {
+            return 0.0;
+        }
+        TETS.iter()
+            .map(|tet| tet_fraction(tet.map(|c| u[c])))
+            .sum::<f64>()
+            / 6.0
+    }
+}
+
+/// Cells of one level that a bracket `[a, b]` of thresholds can still
+/// change, and the count of those full for every threshold in it.
+pub(super) struct Active {
+    full: f64,
+    cells: Vec<u32>,
+}
+
+impl Active {
+    pub(super) fn new(lv: &Level<'_>, a: f64, b: f64) -> Active {
+        let total = lv.m * lv.m * lv.m;
+        let parts: Vec<(f64, Vec<u32>)> = (0..total.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut full = 0.0;
+                let mut keep = Vec::new();
+                for q in c * CHUNK..((c + 1) * CHUNK).min(total) {
+                    let base = lv.base(q);
+                    let (lo, hi) = lv.bounds(base);
+                    if hi <= a {
+                        full += 1.0;
+                    } else if lo <= b {
+                        keep.push(base as u32);
+                    }
+                }
+                (full, keep)
+            })
+            .collect();
+        let mut out = Active {
+            full: 0.0,
+            cells: Vec::new(),
+        };
+        for (f, keep) in parts {
+            out.full += f;
+            out.cells.extend(keep);
+        }
+        out
+    }
+
+    pub(super) fn narrow(&mut self, lv: &Level<'_>, a: f64, b: f64) {
+        let mut full = 0.0;
+        self.cells.retain(|&base| {
+            let (lo, hi) = lv.bounds(base as usize);
+            if hi <= a {
+                full += 1.0;
+                false
+            } else {
+                lo <= b
+            }
+        });
+        self.full += full;
+    }
+
+    pub(super) fn fraction(&self, lv: &Level<'_>, t: f64) -> f64 {
+        let sums: Vec<f64> = self
+            .cells
+            .par_chunks(CHUNK)
+            .map(|cs| {
+                cs.iter()
+                    .map(|&base| lv.cell_fraction(base as usize, t))
+                    .sum::<f64>()
+            })
+            .collect();
+        (self.full + sums.iter().sum::<f64>()) / (lv.m * lv.m * lv.m) as f64
+    }
+}
+
+/// Fraction of a tetrahedron where the linear interpolant of the vertex
+/// values `u` is `>= 0`. With the vertices sorted into `p_i >= 0 > n_j`,
+/// the closed forms have only positive terms (no cancellation):
+/// one vertex in, `p^3 / prod (p - n_j)`; two in, the polynomial below over
+/// `prod (p_i - n_j)`; three in, one minus the one-vertex form of `-u`.
+pub fn tet_fraction(u: [f64; 4]) -> f64 {
+    let (mut pos, mut neg) = ([0.0; 4], [0.0; 4]);
+    let (mut np, mut nn) = (0, 0);
+    for v in u {
+        if v >= 0.0 {
+            pos[np] = v;
+            np += 1;
+        } else {
+            neg[nn] = v;
+            nn += 1;
+        }
+    }
+    let corner = |a: f64, o: [f64; 3]| a * a * a / ((a - o[0]) * (a - o[1]) * (a - o[2]));
+    match np {
+        0 => 0.0,
+        1 => corner(pos[0], [neg[0], neg[1], neg[2]]),
+        2 => {
+            let (p, q, r, s) = (pos[0], pos[1], -neg[0], -neg[1]);
+            // With r, s >= 0 standing for the negated negative values.
+            let num =
+                p * p * q * q + (p * p * q + p * q * q) * (r + s) + (p * p + p * q + q * q) * r * s;
+            num / ((p + r) * (p + s) * (q + r) * (q + s))
+        }
+        3 => 1.0 - corner(-neg[0], [-pos[0], -pos[1], -pos[2]]),
+        _ => 1.0,
+    }
+}
