@@ -1,6 +1,7 @@
 //! `bench/run mesh`: the tori-ball block meshed by microfrep (uniform grid,
-//! n cells) and by fidget's Manifold Dual Contouring (octree depth d, 2^d
-//! cells), both on 2 threads, with each mesh's size, bad edges and volume
+//! n cells, marching cubes; marching tetrahedra timed alongside) and by
+//! fidget's Manifold Dual Contouring (octree depth d, 2^d cells), both on 2
+//! threads, with each mesh's size, bad edges and volume
 //! error (reference: 1.6378 by Monte Carlo, +- 0.0003).
 
 use crate::to_fidget::translate;
@@ -8,7 +9,7 @@ use fidget::jit::JitFunction;
 use fidget::render::ThreadPool;
 use fidget::shape::{BoundShape, Shape};
 use microfrep_mesh::check::check;
-use microfrep_mesh::{Mesh, MeshOptions, Plan};
+use microfrep_mesh::{CellMethod, Mesh, MeshOptions, Plan};
 use microfrep_structures::examples::toriball;
 use std::time::Instant;
 
@@ -44,7 +45,21 @@ pub fn run() -> Result<(), String> {
     let theirs = ThreadPool::Custom(pool()?);
     let (ctx, root) = translate(&expr)?;
     for (n, depth) in [(128usize, 7u8), (256, 8)] {
-        let opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], n);
+        // Marching cubes (the faster cell method); the default, marching
+        // tetrahedra, is timed too, for reference.
+        let mut opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], n);
+        let tets_s = {
+            let t = Instant::now();
+            let m = ours.install(|| {
+                Plan::new(&expr, &opts)
+                    .and_then(|p| p.run(&|_| {}))
+                    .map_err(|e| e.to_string())
+            })?;
+            let s = t.elapsed().as_secs_f64();
+            drop(m);
+            s
+        };
+        opts.cells = CellMethod::Cubes;
         let (t, c) = (Instant::now(), cpu_seconds());
         let m = ours.install(|| {
             Plan::new(&expr, &opts)
@@ -78,7 +93,8 @@ pub fn run() -> Result<(), String> {
         println!(
             "RESULT toriball_{n} microfrep_s={ms:.3} fidget_s={fs:.3} ratio={:.1} \
              microfrep_cpu_s={mc:.2} fidget_cpu_s={fc:.2} cpu_ratio={:.1} microfrep_tris={} fidget_tris={} microfrep_bad_edges={} fidget_bad_edges={} \
-             microfrep_vol_err={:.4} fidget_vol_err={:.4} fidget_depth={depth}",
+             microfrep_vol_err={:.4} fidget_vol_err={:.4} fidget_depth={depth} \
+             cells=cubes microfrep_tets_s={tets_s:.3} tets_ratio={:.1}",
             fs / ms,
             fc / mc,
             a.triangles,
@@ -87,6 +103,7 @@ pub fn run() -> Result<(), String> {
             b.bad_edges,
             (a.volume - VOLUME) / VOLUME,
             (b.volume.abs() - VOLUME) / VOLUME,
+            fs / tets_s,
         );
     }
     Ok(())

@@ -1,7 +1,7 @@
 //! Times the mesher on a built-in example, for profiling: `cargo run
 //! --release -p microfrep-mesh --example profile_mesh -- NAME N [THREADS]`.
 //! `STREAM=1` streams through a counting sink instead of collecting the
-//! mesh; `BRICK=K` sets the brick size.
+//! mesh; `BRICK=K` sets the brick size; `CUBES=1` uses marching cubes.
 
 use microfrep_mesh::{MeshOptions, Plan};
 use std::time::Instant;
@@ -23,6 +23,9 @@ fn main() {
         let mut opts = MeshOptions::new([lo, hi], n);
         if let Some(b) = std::env::var("BRICK").ok().and_then(|s| s.parse().ok()) {
             opts.brick = b;
+        }
+        if std::env::var("CUBES").is_ok() {
+            opts.cells = microfrep_mesh::CellMethod::Cubes;
         }
         let plan = Plan::new(&expr, &opts).expect("plan");
         let t_plan = t.elapsed().as_secs_f64();

@@ -1,11 +1,11 @@
-//! Meshing one surface brick: dense f32 sampling of its nodes, marching
-//! tetrahedra over its cells, refinement of the vertices it owns.
+//! Meshing one surface brick: dense f32 sampling of its nodes, a table of
+//! triangles per cell sign pattern, refinement of the vertices it owns.
 
 use crate::classify::{proven_sign, unproven_cells, BrickClass};
-use microfrep_core::csg::{Csg, CsgEval};
 use crate::grid::Grid;
 use crate::refine::{refine_edges, Edge};
-use crate::tets::cell_table;
+use crate::tets::CellTable;
+use microfrep_core::csg::{Csg, CsgEval};
 use microfrep_core::{BatchEval, Tape, BLOCK};
 
 /// The part of the mesh made by one brick. Vertices on grid edges that start
@@ -32,7 +32,8 @@ pub struct Scratch<'t> {
     vals: Vec<f32>,
     inside: Vec<u8>,
     /// Local edge -> local vertex, u32::MAX when unset, for the edges that
-    /// start in two node layers: ((z & 1) * layer + y * nx + x) * 8 + dir.
+    /// start in two node layers: ((z & 1) * layer + y * nx + x) * stride +
+    /// slot (see [`mesh_brick`]).
     vmap: Vec<u32>,
     /// Start node (x, y, z; 9 bits each) and direction (bits 27..30) of
     /// each local vertex.
@@ -59,10 +60,18 @@ impl<'t> Scratch<'t> {
     }
 }
 
+/// Where a cell edge's vertex is looked up, relative to its cell.
+struct EdgeOffset {
+    slot: usize,
+    packed: u32,
+    dz: usize,
+}
+
 /// Meshes brick `b`; `classes` gives the proven signs of shared nodes.
 pub fn mesh_brick(
     grid: &Grid,
     classes: &[BrickClass],
+    table: &CellTable,
     b: [usize; 3],
     s: &mut Scratch,
 ) -> BrickMesh {
@@ -79,17 +88,44 @@ pub fn mesh_brick(
         };
     }
 
-    // Marching tetrahedra over the cells, a layer of cells at a time;
+    // Triangles of the cells from `table`, a layer of cells at a time;
     // vertices deduplicated per local edge through `vmap`, which holds the
     // two node layers the current cell layer touches (small enough to stay
     // in cache).
-    let table = cell_table();
     let (sx, sy) = (1, n[0]);
     let sz = n[0] * n[1];
     s.tris.clear();
     s.verts.clear();
     let mut q = vec![0u8; n[0]];
+    // Per cell edge (start corner * 8 + direction): its vmap slot and packed
+    // start node relative to the cell's, and which node layer it starts in.
+    // Slots per node in `vmap`: 8 (by direction) when the table uses
+    // diagonals, else 4 with the three axes in slots 1, 2, 3 (a smaller
+    // footprint in cache).
+    let axes_only = table
+        .tris
+        .iter()
+        .flatten()
+        .all(|e| (e & 7).is_power_of_two());
+    let stride = if axes_only { 4 } else { 8 };
+    let slot_of = |dir: usize| {
+        if axes_only {
+            (dir & 3) | ((dir >> 2) * 3)
+        } else {
+            dir
+        }
+    };
+    let offs: [EdgeOffset; 64] = std::array::from_fn(|e| {
+        let (c, dir) = (e >> 3, e & 7);
+        let (dx, dy, dz) = (c & 1, (c >> 1) & 1, c >> 2);
+        EdgeOffset {
+            slot: (dy * sy + dx) * stride + slot_of(dir),
+            packed: (dx | dy << 9 | dz << 18 | dir << 27) as u32,
+            dz,
+        }
+    });
     for k in 0..n[2] - 1 {
+        let lay = [(k & 1) * sz * stride, ((k + 1) & 1) * sz * stride];
         for j in 0..n[1] - 1 {
             let row = j * sy + k * sz;
             // Corner bits of the four node rows around this row of cells:
@@ -105,17 +141,14 @@ pub fn mesh_brick(
                     continue;
                 }
                 let range = table.start[mask] as usize..table.start[mask + 1] as usize;
+                let (base, pbase) = ((j * sy + i) * stride, (i | j << 9 | k << 18) as u32);
                 for tri in &table.tris[range] {
                     s.tris.push(tri.map(|e| {
-                        let c = (e >> 3) as usize;
-                        let dir = (e & 7) as u32;
-                        let (ci, cj, ck) = (i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
-                        let slot = ((ck & 1) * sz + cj * sy + ci) * 8 + dir as usize;
-                        let v = &mut s.vmap[slot];
+                        let o = &offs[e as usize];
+                        let v = &mut s.vmap[lay[o.dz] + base + o.slot];
                         if *v == u32::MAX {
                             *v = s.verts.len() as u32;
-                            s.verts
-                                .push(ci as u32 | (cj as u32) << 9 | (ck as u32) << 18 | dir << 27);
+                            s.verts.push(pbase + o.packed);
                         }
                         *v
                     }));
@@ -123,11 +156,11 @@ pub fn mesh_brick(
             }
         }
         // Node layer k is touched by no later cell layer.
-        let parity = (k & 1) * sz * 8;
-        s.vmap[parity..parity + sz * 8].fill(u32::MAX);
+        let parity = (k & 1) * sz * stride;
+        s.vmap[parity..parity + sz * stride].fill(u32::MAX);
     }
-    let parity = ((n[2] - 1) & 1) * sz * 8;
-    s.vmap[parity..parity + sz * 8].fill(u32::MAX);
+    let parity = ((n[2] - 1) & 1) * sz * stride;
+    s.vmap[parity..parity + sz * stride].fill(u32::MAX);
     // Owned vertices first (in creation order), then foreign ones. A vertex
     // is owned when its edge starts below the brick's upper faces (or on
     // the grid's last brick along that axis).
@@ -220,13 +253,24 @@ fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
 /// that shares them: the outer padding layer is outside, and nodes in a
 /// brick proven empty or full take that sign.
 fn fix_signs(grid: &Grid, classes: &[BrickClass], lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
+    // Bricks sharing a node with this one lie among its 26 neighbours; when
+    // none of them is proven empty or full (most of a dense structure), no
+    // node needs the per-node search.
+    let b = grid.owner_brick(lo);
+    let near = |a: usize| b[a].saturating_sub(1)..(b[a] + 2).min(grid.bricks[a]);
+    let any_proven = near(2).any(|z| {
+        near(1)
+            .any(|y| near(0).any(|x| classes[grid.brick_index([x, y, z])] != BrickClass::Surface))
+    });
     let mut fix = |i: usize, j: usize, k: usize| {
         let g = [lo[0] + i, lo[1] + j, lo[2] + k];
         let l = i + n[0] * (j + n[1] * k);
         if grid.on_border(g) {
             s.inside[l] = 0;
-        } else if let Some(v) = proven_sign(grid, classes, g) {
-            s.inside[l] = v as u8;
+        } else if any_proven {
+            if let Some(v) = proven_sign(grid, classes, g) {
+                s.inside[l] = v as u8;
+            }
         }
     };
     for k in 0..n[2] {

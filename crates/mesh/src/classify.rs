@@ -1,8 +1,8 @@
 //! Brick classification by interval arithmetic: bricks where the model is
 //! provably negative (empty) or non-negative (full) need no sampling.
 
-use microfrep_core::csg::{Csg, CsgEval};
 use crate::grid::Grid;
+use microfrep_core::csg::{Csg, CsgEval};
 use microfrep_core::Interval;
 use rayon::prelude::*;
 

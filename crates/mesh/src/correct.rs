@@ -44,47 +44,48 @@ pub fn accumulate(
     acc: &mut [Acc],
 ) {
     let step = (h / 8.0) as f32;
+    let inv_step = 1.0 / step;
     let limit = (h / 2.0) as f32;
     const HALF: usize = BLOCK / 2;
     let mut an = [[0.0f32; 3]; HALF];
+    let mut area = [0.0f32; HALF];
     for chunk in tris.chunks(HALF) {
         let n = chunk.len();
         {
             let (x, y, z) = ev.coords_mut();
             for (i, t) in chunk.iter().enumerate() {
                 let [p, q, r] = t.map(|v| pos[v as usize]);
-                let c: [f32; 3] = std::array::from_fn(|k| (p[k] + q[k] + r[k]) / 3.0);
+                let c: [f32; 3] = std::array::from_fn(|k| (p[k] + q[k] + r[k]) * (1.0 / 3.0));
                 let a = cross(sub(q, p), sub(r, p));
-                an[i] = a;
                 let len = norm(a);
-                let d = a.map(|v| v / len);
+                (an[i], area[i]) = (a, len);
+                let s = step / len;
                 (x[i], y[i], z[i]) = (c[0], c[1], c[2]);
                 let j = i + n;
-                x[j] = c[0] + step * d[0];
-                y[j] = c[1] + step * d[1];
-                z[j] = c[2] + step * d[2];
+                x[j] = c[0] + s * a[0];
+                y[j] = c[1] + s * a[1];
+                z[j] = c[2] + s * a[2];
             }
         }
         let f = ev.eval_loaded(2 * n);
+        let (f0, f1) = f.split_at(n);
         for (i, t) in chunk.iter().enumerate() {
             // Gap along the outward normal from the centroid to the surface,
             // from f and its slope along the normal (one-sided difference).
-            let slope = (f[i + n] - f[i]) / step;
-            let d = -f[i] / slope;
+            let slope = (f1[i] - f0[i]) * inv_step;
+            let d = -f0[i] / slope;
             let gap = if slope < 0.0 && d.is_finite() {
                 d.clamp(-limit, limit)
             } else {
                 0.0
             };
-            let a = an[i];
-            let area = norm(a);
+            let (a, w) = (an[i], area[i]);
+            let add = [a[0], a[1], a[2], w * gap, w];
             for &v in t {
                 let s = &mut acc[v as usize];
-                s[0] += a[0];
-                s[1] += a[1];
-                s[2] += a[2];
-                s[3] += area * gap;
-                s[4] += area;
+                for k in 0..5 {
+                    s[k] += add[k];
+                }
             }
         }
     }

@@ -4,7 +4,8 @@
 //! arithmetic taken through the model's set operations ([`csg`]; empty and
 //! full ones skipped), surface bricks are sampled
 //! densely with the f32 batch evaluator and meshed by marching tetrahedra
-//! ([`tets`] argues why the result is closed and manifold), vertices are
+//! or marching cubes ([`tets`] and [`cubes`] argue why the result is closed
+//! and manifold; [`CellMethod`]), vertices are
 //! keyed by their global grid edge so bricks share them, and moved onto the
 //! surface by regula falsi on the batch evaluator; a last pass offsets them
 //! along their normals to cancel the chordal volume loss ([`correct`]).
@@ -29,6 +30,7 @@ pub mod check;
 mod classify;
 pub mod correct;
 pub use microfrep_core::csg;
+pub mod cubes;
 mod grid;
 pub mod memory;
 mod pipeline;
@@ -73,6 +75,35 @@ pub struct MeshOptions {
     pub resolution: usize,
     /// Cells per brick side.
     pub brick: usize,
+    /// How a cell's surface is made from its corner signs.
+    pub cells: CellMethod,
+}
+
+/// Surface extraction inside a cell. Both give closed, oriented 2-manifolds
+/// with vertices shared across cells (see [`tets`] and [`cubes`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CellMethod {
+    /// Marching tetrahedra on the Kuhn split: vertices also on face and
+    /// body diagonals, so creases are cut less (the rod lattice's area is
+    /// within 0.7 % at 20 cells per period), about 1.6x the triangles of
+    /// dual contouring.
+    #[default]
+    Tetrahedra,
+    /// Marching cubes with a fixed rule for ambiguous faces: vertices on
+    /// grid edges only, about a third of the triangles and vertices of
+    /// [`CellMethod::Tetrahedra`] and about 2.5x faster; smooth surfaces
+    /// are as accurate, sharp creases are chamfered (the rod lattice's area
+    /// is 3.3 % low at 20 cells per period, 0.7 % at 80).
+    Cubes,
+}
+
+impl CellMethod {
+    pub(crate) fn table(self) -> &'static tets::CellTable {
+        match self {
+            CellMethod::Tetrahedra => tets::cell_table(),
+            CellMethod::Cubes => cubes::cell_table(),
+        }
+    }
 }
 
 impl MeshOptions {
@@ -81,6 +112,7 @@ impl MeshOptions {
             bounds,
             resolution,
             brick: 32,
+            cells: CellMethod::default(),
         }
     }
 }
@@ -93,6 +125,8 @@ pub struct Plan {
     csg: csg::Csg,
     pub grid: Grid,
     classes: Vec<BrickClass>,
+    cells: CellMethod,
+    table: &'static tets::CellTable,
     thin_cells: std::sync::atomic::AtomicUsize,
 }
 
@@ -114,6 +148,8 @@ impl Plan {
             csg,
             grid,
             classes,
+            cells: opts.cells,
+            table: opts.cells.table(),
             thin_cells: Default::default(),
         })
     }

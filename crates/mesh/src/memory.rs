@@ -2,13 +2,16 @@
 //! a coarse sampling of the model: surface cells scale with the square of
 //! the resolution.
 
-use crate::Plan;
+use crate::{CellMethod, Plan};
 use microfrep_core::eval_grid_par;
 
 /// Triangles and vertices per surface cell of marching tetrahedra on the
-/// Kuhn split (measured on a sphere: about 5.9 and 3.0; rounded up).
+/// Kuhn split (measured on a sphere: about 5.9 and 3.0; rounded up), and of
+/// marching cubes (2.9 times fewer of both on the tori-ball; rounded up).
 const TRIS_PER_CELL: f64 = 6.2;
 const VERTS_PER_CELL: f64 = 3.1;
+const CUBES_TRIS_PER_CELL: f64 = 2.2;
+const CUBES_VERTS_PER_CELL: f64 = 1.1;
 /// Bytes per triangle at the peak, which comes in the mesh check after the
 /// mesh is made: the mesh (12), the checker's half-edges (24) and sorted
 /// copy (12), plus slack. Calibrated on the 512^3 tori-ball (92 M
@@ -52,8 +55,12 @@ pub fn estimate(plan: &Plan) -> Estimate {
         }
     }
     let cells = surface as f64 * scale * scale;
-    let triangles = cells * TRIS_PER_CELL;
-    let vertices = cells * VERTS_PER_CELL;
+    let (tpc, vpc) = match plan.cells {
+        CellMethod::Tetrahedra => (TRIS_PER_CELL, VERTS_PER_CELL),
+        CellMethod::Cubes => (CUBES_TRIS_PER_CELL, CUBES_VERTS_PER_CELL),
+    };
+    let triangles = cells * tpc;
+    let vertices = cells * vpc;
     let scratch = scratch_bytes(plan);
     Estimate {
         triangles,
