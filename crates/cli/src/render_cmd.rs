@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Model: a built-in example name.
+    /// Model: a HyperFun file (.hf) or a built-in example name (see `microfrep examples`).
     model: String,
     /// Output PNG.
     #[arg(short, long)]

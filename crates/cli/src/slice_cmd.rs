@@ -18,7 +18,7 @@ pub enum SliceFormat {
 
 #[derive(Args)]
 pub struct SliceArgs {
-    /// Model: a built-in example name.
+    /// Model: a HyperFun file (.hf) or a built-in example name (see `microfrep examples`).
     model: String,
     /// Output directory (png, svg) or file (cli); must not exist.
     #[arg(short, long)]

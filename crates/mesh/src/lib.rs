@@ -87,13 +87,14 @@ pub enum CellMethod {
     /// body diagonals, so creases are cut less (the rod lattice's area is
     /// within 0.7 % at 20 cells per period), about 1.6x the triangles of
     /// dual contouring.
-    #[default]
     Tetrahedra,
     /// Marching cubes with a fixed rule for ambiguous faces: vertices on
     /// grid edges only, about a third of the triangles and vertices of
     /// [`CellMethod::Tetrahedra`] and about 2.5x faster; smooth surfaces
     /// are as accurate, sharp creases are chamfered (the rod lattice's area
-    /// is 3.3 % low at 20 cells per period, 0.7 % at 80).
+    /// is 3.3 % low at 20 cells per period, 0.7 % at 80). The default:
+    /// smaller files, faster, and as accurate on smooth microstructures.
+    #[default]
     Cubes,
 }
 

@@ -1,17 +1,18 @@
-//! The mesher's guarantees and convergence on models with known answers.
+//! The mesher's guarantees and convergence on models with known answers,
+//! with marching tetrahedra (`tests/cubes.rs` holds the same for the
+//! default, marching cubes).
 
 use microfrep_core::{prims, Expr};
 use microfrep_mesh::check::{check, CheckReport};
-use microfrep_mesh::{Mesh, MeshOptions, Plan};
+use microfrep_mesh::{CellMethod, Mesh, MeshOptions, Plan};
 use microfrep_structures::examples::toriball;
 use microfrep_structures::lattice::{rod_lattice, rod_lattice_volume_fraction, Slabs};
 use std::f64::consts::PI;
 
 fn mesh(e: &Expr, bounds: [[f64; 3]; 2], n: usize) -> (Mesh, CheckReport) {
-    let m = Plan::new(e, &MeshOptions::new(bounds, n))
-        .unwrap()
-        .run(&|_| {})
-        .unwrap();
+    let mut o = MeshOptions::new(bounds, n);
+    o.cells = CellMethod::Tetrahedra;
+    let m = Plan::new(e, &o).unwrap().run(&|_| {}).unwrap();
     let r = check(&m);
     assert!(r.is_closed_manifold(), "n = {n}: {r:?}");
     (m, r)
