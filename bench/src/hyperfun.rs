@@ -62,7 +62,7 @@ fn gyroid_rust() -> Expr {
 pub fn run() -> Result<(), String> {
     let gyroid_path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/hyperfun/corpus/penev_s4_gyroid.hf"
+        "/../crates/hyperfun/testdata/corpus/penev_s4_gyroid.hf"
     );
     let gyroid_src =
         std::fs::read_to_string(gyroid_path).map_err(|e| format!("reading {gyroid_path}: {e}"))?;

@@ -1,5 +1,5 @@
 //! Conformance against the original interpreter's outputs
-//! (`../shared/hyperfun/reference`, see its README): point values of every
+//! (`testdata/reference`, a copy of `../shared/hyperfun/reference`): point values of every
 //! corpus model, 64^3 inside counts, and every probe program.
 //!
 //! Known exceptions are listed in `EXCEPTIONS` with their reason; anything
@@ -9,7 +9,7 @@ use microfrep_hyperfun::{load, Model};
 use std::path::{Path, PathBuf};
 
 fn shared() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/hyperfun")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata")
 }
 
 /// Probes whose reference behaviour this implementation deliberately does

@@ -4,17 +4,19 @@ use microfrep_hyperfun::{parse_with, Options};
 use proptest::prelude::*;
 
 fn corpus() -> Vec<Vec<u8>> {
-    let dir = std::path::Path::new("/work/shared/hyperfun/corpus");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/corpus");
     let mut files: Vec<_> = std::fs::read_dir(dir)
-        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect())
-        .unwrap_or_default();
+        .expect("testdata/corpus")
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .collect();
     files.sort();
     let mut out: Vec<Vec<u8>> = files
         .iter()
         .filter(|p| p.extension().is_some_and(|x| x == "hf"))
         .filter_map(|p| std::fs::read(p).ok())
         .collect();
-    // Keeps the test meaningful without the shared corpus.
+    // A small model exercising arrays, conditions and operators.
     out.push(b"my_model(x[3], a[1]) { array v[2]; v = [1, -2]; if x[1] > 0 then y = v[1]; else y = 2; endif; my_model = hfSphere(x, v, y) | 0.5^2; }".to_vec());
     out
 }

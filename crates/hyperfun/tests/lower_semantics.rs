@@ -130,8 +130,7 @@ fn runaway_loops_stop_with_an_error_instead_of_hanging() {
 /// loading and evaluating must never panic.
 #[test]
 fn mutated_corpus_files_never_panic() {
-    let dir =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/hyperfun/corpus");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/corpus");
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .filter_map(|e| Some(e.ok()?.path()))
