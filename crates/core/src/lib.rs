@@ -13,8 +13,8 @@
 //!
 //! Sign convention everywhere: inside is `f >= 0`.
 
-pub mod eval;
 pub mod csg;
+pub mod eval;
 pub mod expr;
 pub mod field;
 pub mod frep;

@@ -1,9 +1,9 @@
 //! Ray-cast images: hits shaded Lambert plus ambient from the gradient.
 
 use crate::camera::{dot, normalize, Camera};
-use microfrep_core::csg::Csg;
 use crate::image::RgbImage;
 use crate::trace::Tracer;
+use microfrep_core::csg::Csg;
 use microfrep_core::{GradEval, Tape};
 use rayon::prelude::*;
 
