@@ -5,7 +5,9 @@ use microfrep_core::{prims, Expr};
 use microfrep_mesh::check::{check, CheckReport};
 use microfrep_mesh::{CellMethod, MeshOptions, Plan};
 use microfrep_structures::examples::toriball;
-use microfrep_structures::lattice::{rod_lattice, rod_lattice_volume_fraction, Slabs};
+use microfrep_structures::lattice::{
+    rod_lattice, rod_lattice_area_in_unit_cube, rod_lattice_volume_fraction, Slabs,
+};
 use std::f64::consts::PI;
 
 fn opts(bounds: [[f64; 3]; 2], n: usize) -> MeshOptions {
@@ -69,43 +71,12 @@ fn rod_lattice_converges_with_chamfered_creases() {
     let l = 0.3;
     let lattice = rod_lattice(&Expr::xyz(), &Slabs::uniform(2.0 * PI, l), 1.0);
     let b = [[0.0; 3], [1.0; 3]];
-    let exact = (rod_lattice_volume_fraction(l), lattice_area(l));
+    let exact = (
+        rod_lattice_volume_fraction(l),
+        rod_lattice_area_in_unit_cube(l),
+    );
     let limits = [(1.5e-3, 4.5e-2), (5e-4, 1.5e-2), (1.5e-4, 9e-3)];
     converges(&lattice, b, &[20, 40, 80], exact, &limits);
-}
-
-/// Exact area of the alpha = 1 rod lattice clipped to the unit cube (faces
-/// between solid and empty boxes of the 3 x 3 x 3 slab partition).
-fn lattice_area(l: f64) -> f64 {
-    let w = (PI - 2.0 * l.asin()) / (2.0 * PI);
-    let a = l.asin() / (2.0 * PI);
-    let cuts = [0.0, a, a + w, 1.0];
-    let len = |i: usize| cuts[i + 1] - cuts[i];
-    let solid = |c: [i32; 3]| -> bool {
-        c.iter().all(|&v| (0..3).contains(&v)) && c.iter().filter(|&&v| v == 1).count() >= 2
-    };
-    let mut area = 0.0;
-    for x in 0..3 {
-        for y in 0..3 {
-            for z in 0..3 {
-                let c = [x, y, z];
-                if !solid(c) {
-                    continue;
-                }
-                for ax in 0..3 {
-                    for d in [-1, 1] {
-                        let mut n = c;
-                        n[ax] += d;
-                        if !solid(n) {
-                            let (u, v) = ((ax + 1) % 3, (ax + 2) % 3);
-                            area += len(c[u] as usize) * len(c[v] as usize);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    area
 }
 
 #[test]

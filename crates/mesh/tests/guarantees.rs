@@ -6,7 +6,9 @@ use microfrep_core::{prims, Expr};
 use microfrep_mesh::check::{check, CheckReport};
 use microfrep_mesh::{CellMethod, Mesh, MeshOptions, Plan};
 use microfrep_structures::examples::toriball;
-use microfrep_structures::lattice::{rod_lattice, rod_lattice_volume_fraction, Slabs};
+use microfrep_structures::lattice::{
+    rod_lattice, rod_lattice_area_in_unit_cube, rod_lattice_volume_fraction, Slabs,
+};
 use std::f64::consts::PI;
 
 fn mesh(e: &Expr, bounds: [[f64; 3]; 2], n: usize) -> (Mesh, CheckReport) {
@@ -69,47 +71,18 @@ fn torus_has_genus_one_and_converges() {
     assert_eq!(mesh(&torus(), b, 32).1.euler, 0);
 }
 
-/// Exact area of the alpha = 1 rod lattice clipped to the unit cube: the
-/// solid is a union of boxes on the 3 x 3 x 3 partition by the slab
-/// interval [a, a + w] on each axis; sum the faces between solid and not.
-fn lattice_area(l: f64) -> f64 {
-    let w = (PI - 2.0 * l.asin()) / (2.0 * PI);
-    let a = l.asin() / (2.0 * PI);
-    let cuts = [0.0, a, a + w, 1.0];
-    let len = |i: usize| cuts[i + 1] - cuts[i];
-    let solid = |c: [i32; 3]| -> bool {
-        c.iter().all(|&v| (0..3).contains(&v)) && c.iter().filter(|&&v| v == 1).count() >= 2
-    };
-    let mut area = 0.0;
-    for x in 0..3 {
-        for y in 0..3 {
-            for z in 0..3 {
-                let c = [x, y, z];
-                if !solid(c) {
-                    continue;
-                }
-                for ax in 0..3 {
-                    for d in [-1, 1] {
-                        let mut n = c;
-                        n[ax] += d;
-                        if !solid(n) {
-                            let (u, v) = ((ax + 1) % 3, (ax + 2) % 3);
-                            area += len(c[u] as usize) * len(c[v] as usize);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    area
-}
-
 #[test]
 fn rod_lattice_volume_fraction_and_area_converge() {
     let l = 0.3;
     let b = [[0.0; 3], [1.0; 3]];
     let vol = rod_lattice_volume_fraction(l);
-    let errs = errors(&lattice(), b, &[20, 40, 80], vol, lattice_area(l));
+    let errs = errors(
+        &lattice(),
+        b,
+        &[20, 40, 80],
+        vol,
+        rod_lattice_area_in_unit_cube(l),
+    );
     println!("lattice {errs:?}");
     // Area converges slowly (about h^0.5) at the lattice's sharp creases.
     let limits = [(5e-4, 1e-2), (2e-4, 7e-3), (1e-4, 5e-3)];

@@ -78,3 +78,42 @@ pub fn rod_lattice_volume_fraction(l: f64) -> f64 {
     let w = (std::f64::consts::PI - 2.0 * l.asin()) / (2.0 * std::f64::consts::PI);
     3.0 * w * w - 2.0 * w * w * w
 }
+
+/// Surface area of the alpha = 1 lattice with equal parameters, period 1
+/// (q = 2 pi) and phase 0, clipped to the unit cube `[0, 1]^3`. Slab `i` is
+/// positive on `[a, a + w]` with `a = asin(l) / (2 pi)`, so the cube splits
+/// into 3 x 3 x 3 boxes, a box being solid where at least two of its axes
+/// fall in the slab; the area sums the faces between solid and empty boxes
+/// (the cube's own faces do not count).
+pub fn rod_lattice_area_in_unit_cube(l: f64) -> f64 {
+    use std::f64::consts::PI;
+    let w = (PI - 2.0 * l.asin()) / (2.0 * PI);
+    let a = l.asin() / (2.0 * PI);
+    let cuts = [0.0, a, a + w, 1.0];
+    let len = |i: usize| cuts[i + 1] - cuts[i];
+    let solid = |c: [i32; 3]| -> bool {
+        c.iter().all(|&v| (0..3).contains(&v)) && c.iter().filter(|&&v| v == 1).count() >= 2
+    };
+    let mut area = 0.0;
+    for x in 0..3 {
+        for y in 0..3 {
+            for z in 0..3 {
+                let c = [x, y, z];
+                if !solid(c) {
+                    continue;
+                }
+                for ax in 0..3 {
+                    for d in [-1, 1] {
+                        let mut n = c;
+                        n[ax] += d;
+                        if !solid(n) {
+                            let (u, v) = ((ax + 1) % 3, (ax + 2) % 3);
+                            area += len(c[u] as usize) * len(c[v] as usize);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    area
+}
