@@ -6,6 +6,8 @@
 //! polytope whose volume and area are taken exactly; a quadrilateral that
 //! is not planar is taken as the mean of its two triangulations.
 
+use microfrep_core::geom::{cross, norm, sub};
+
 /// The zero-set polygon of a tetrahedron: `n` (0, 3 or 4) vertices, each on
 /// the edge `(i, j)` at parameter `t` from `i`, in cyclic order.
 #[derive(Clone, Copy, Debug)]
@@ -118,22 +120,6 @@ pub fn iso_polygon_cut(f: [f64; 4], cut: impl Fn(usize, usize) -> f64) -> IsoPol
 
 fn tri(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     0.5 * norm(cross(sub(b, a), sub(c, a)))
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 #[cfg(test)]

@@ -63,16 +63,7 @@ pub struct Measures {
     pub bricks: usize,
 }
 
-/// The six tetrahedra of the Kuhn split: corners as bit masks (bit a set =
-/// far side on axis a), each a path from corner 0 to corner 7.
-pub(crate) const TETS: [[usize; 4]; 6] = [
-    [0, 1, 3, 7],
-    [0, 1, 5, 7],
-    [0, 2, 3, 7],
-    [0, 2, 6, 7],
-    [0, 4, 5, 7],
-    [0, 4, 6, 7],
-];
+pub(crate) use microfrep_core::geom::KUHN_TETS as TETS;
 
 pub(crate) struct Scratch<'t> {
     pub(crate) solid_iv: IntervalEval<'t>,

@@ -8,6 +8,7 @@
 use crate::area::{iso_polygon, iso_polygon_cut, IsoPolygon};
 use crate::crease::{roots, Seg};
 use crate::measure::{Ctx, TETS};
+use microfrep_core::geom::{cross, dot};
 
 /// Fraction of the tetrahedron's volume where the linear interpolant of the
 /// vertex values `f` is `>= 0` (see [`crate::area::IsoPolygon::inside_fraction`]).
@@ -272,18 +273,6 @@ fn bulge(
         grad,
         cap: 0.5 * leaf.h.iter().cloned().fold(0.0, f64::max),
     })
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Solid volume, region volume and area of a cell with a sign change,

@@ -18,6 +18,7 @@ pub mod eval;
 pub mod expr;
 pub mod field;
 pub mod frep;
+pub mod geom;
 pub mod graph;
 pub mod interval;
 pub mod noise;

@@ -25,6 +25,7 @@
 //! the surface never reaches the grid boundary (closed).
 
 pub use crate::tets::{CellEdge, CellTable};
+use microfrep_core::geom::{cross, dot, sub};
 use std::sync::OnceLock;
 
 /// Triangles for each of the 256 corner sign patterns of a cell (bit c set
@@ -55,22 +56,6 @@ fn midpoint(e: CellEdge) -> [f64; 3] {
 fn edge(u: u8, v: u8) -> CellEdge {
     let (s, e) = if u & v == u { (u, v) } else { (v, u) };
     s * 8 + (s ^ e)
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The six faces as (corners in cyclic order, outward normal).

@@ -18,6 +18,7 @@
 //! ones; that choice is fixed by the signs alone (below), so neighbouring
 //! triangles agree and the normals point out of the solid.
 
+use microfrep_core::geom::{cross, dot, sub};
 use std::sync::OnceLock;
 
 /// One grid edge of a cell: start corner (bits x, y, z) and direction
@@ -53,22 +54,6 @@ fn midpoint(e: CellEdge) -> [f64; 3] {
     let a = corner_pos(s);
     let b = corner_pos(s | d);
     std::array::from_fn(|k| 0.5 * (a[k] + b[k]))
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Triangles of one tet with inside corners `inside` (a subset of `tet`),

@@ -1,21 +1,11 @@
 //! The cells of a node grid (or of its every-other-node coarsening) and the
 //! sublevel volume of the linear interpolant on their Kuhn tetrahedra.
 
+use microfrep_core::geom::KUHN_TETS as TETS;
 use rayon::prelude::*;
 
 /// Cells summed per task: fixed, so sums are deterministic.
 pub(super) const CHUNK: usize = 4096;
-
-/// The six tetrahedra of the Kuhn split, as corner bit masks (bit `a` set =
-/// far side on axis `a`): each is a monotone path from corner 0 to corner 7.
-const TETS: [[usize; 4]; 6] = [
-    [0, 1, 3, 7],
-    [0, 1, 5, 7],
-    [0, 2, 3, 7],
-    [0, 2, 6, 7],
-    [0, 4, 5, 7],
-    [0, 4, 6, 7],
-];
 
 /// One of the two grids: cells of `stride` node spacings.
 pub(super) struct Level<'a> {
