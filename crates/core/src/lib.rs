@@ -17,6 +17,7 @@ pub mod csg;
 pub mod eval;
 pub mod expr;
 pub mod field;
+pub mod field_check;
 pub mod frep;
 pub mod geom;
 pub mod graph;

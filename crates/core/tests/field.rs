@@ -186,3 +186,39 @@ fn clamps_outside_the_box() {
     assert_eq!(g.grad([5.0, 9.0, 3.0]).1, [0.0; 3]);
     assert!(g.eval([f64::NAN, 0.0, 2.0]).is_nan());
 }
+
+/// The shared four-mode harness passes on the grid field and fails on a
+/// field whose interval lies.
+#[test]
+fn four_mode_harness_accepts_grid_and_rejects_a_liar() {
+    use microfrep_core::field_check::{check_field, FieldCheck};
+    let g: Arc<dyn Field> = Arc::new(GridField::sample("w", DIMS, MIN, MAX, wavy).unwrap());
+    let mut cfg = FieldCheck::new([MIN, MAX]);
+    // Trilinear interpolation has kinks at cell faces; the gradient check
+    // skips them itself, the rest must hold everywhere.
+    cfg.grad_tol = 1e-3;
+    let r = check_field(&g, &cfg).unwrap();
+    assert_eq!(r.points, cfg.points);
+    assert_eq!(r.boxes, cfg.boxes);
+
+    #[derive(Debug)]
+    struct Liar;
+    impl Field for Liar {
+        fn name(&self) -> &str {
+            "liar"
+        }
+        fn eval(&self, p: [f64; 3]) -> f64 {
+            p[0]
+        }
+        fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+            (p[0], [1.0, 0.0, 0.0])
+        }
+        fn interval(&self, b: [Interval; 3]) -> Interval {
+            // Too narrow by half.
+            Interval::new(b[0].lo, b[0].mid())
+        }
+    }
+    let liar: Arc<dyn Field> = Arc::new(Liar);
+    let e = check_field(&liar, &FieldCheck::new([MIN, MAX])).unwrap_err();
+    assert!(e.contains("outside the interval"), "{e}");
+}
