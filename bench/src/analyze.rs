@@ -16,7 +16,8 @@
 
 use microfrep_analysis::grid::{Grid, Sampler};
 use microfrep_analysis::thickness::{thickness_of_labels, PhaseThickness, ThicknessOptions};
-use microfrep_core::Tape;
+use microfrep_core::Shape;
+
 use microfrep_structures::examples::toriball;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -48,7 +49,7 @@ pub fn run() -> Result<(), String> {
     let dir = PathBuf::from("target/analyze-bench");
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let raw = dir.join(format!("toriball{N}.raw"));
-    let tape = Tape::new(&toriball());
+    let tape = Shape::new(toriball());
     let grid = Grid::new([[-1.0; 3], [1.0; 3]], N).map_err(|e| e.to_string())?;
     let labels = Sampler::new(&tape, None, grid).all(&|_, _| {});
     std::fs::write(&raw, &labels).map_err(|e| e.to_string())?;

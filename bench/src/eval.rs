@@ -70,7 +70,7 @@ pub fn run() -> Result<(), String> {
              fidget_chunks={}/{}",
             m / v.max(j),
             x.len(),
-            tape.instrs().len(),
+            tape.len(),
             diff(&outs[1]),
             diff(&outs[2]),
             chunks[1],

@@ -101,8 +101,8 @@ pub fn run() -> Result<(), String> {
             mpts(t_rust),
             t_rust / t_hf,
             x.len(),
-            hf_tape.instrs().len(),
-            rust_tape.instrs().len(),
+            hf_tape.len(),
+            rust_tape.len(),
             hf_tape.listing() == rust_tape.listing(),
             m.lowered,
         );

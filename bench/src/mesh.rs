@@ -52,7 +52,7 @@ pub fn run() -> Result<(), String> {
         let tets_s = {
             let t = Instant::now();
             let m = ours.install(|| {
-                Plan::new(&expr, &opts)
+                Plan::new(&microfrep_core::Shape::from(&expr), &opts)
                     .and_then(|p| p.run(&|_| {}))
                     .map_err(|e| e.to_string())
             })?;
@@ -63,7 +63,7 @@ pub fn run() -> Result<(), String> {
         opts.cells = CellMethod::Cubes;
         let (t, c) = (Instant::now(), cpu_seconds());
         let m = ours.install(|| {
-            Plan::new(&expr, &opts)
+            Plan::new(&microfrep_core::Shape::from(&expr), &opts)
                 .and_then(|p| p.run(&|_| {}))
                 .map_err(|e| e.to_string())
         })?;

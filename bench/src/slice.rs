@@ -11,9 +11,9 @@ use fidget::jit::JitFunction;
 use fidget::raster::pixel::{render, EvalConfig, RenderConfig};
 use fidget::render::ThreadPool;
 use fidget::shape::{BoundShape, Shape};
-use microfrep_core::Tape;
+
 use microfrep_fab::{rasterize_at, write_stack, Format, SliceGrid};
-use microfrep_render::{ray_cast_with, Camera, Csg, View};
+use microfrep_render::{ray_cast, Camera, View};
 use microfrep_structures::examples::{shell_lattice, toriball};
 use std::time::Instant;
 
@@ -51,7 +51,7 @@ pub fn run() -> Result<(), String> {
 fn layer_vs_fidget(ours: &rayon::ThreadPool) -> Result<(), String> {
     let (n, z) = (2048usize, 0.1);
     let expr = shell_lattice();
-    let tape = Tape::new(&expr);
+    let tape = microfrep_core::Shape::new(expr.clone());
     let grid =
         SliceGrid::new([-1.0; 3], [1.0; 3], 2.0, 2.0 / n as f64).map_err(|e| e.to_string())?;
     let (ms, layer) = best(|| Ok(ours.install(|| rasterize_at(&tape, &grid, z))))?;
@@ -92,7 +92,7 @@ fn stack_grid() -> Result<SliceGrid, String> {
 }
 
 fn stack(ours: &rayon::ThreadPool) -> Result<f64, String> {
-    let tape = Tape::new(&toriball());
+    let tape = microfrep_core::Shape::new(toriball());
     let grid = stack_grid()?;
     let dir = std::env::temp_dir().join(format!("microfrep-bench-slice-{}", std::process::id()));
     let (s, _) = best(|| {
@@ -250,7 +250,8 @@ fn stack_vs_mesh(ours: &rayon::ThreadPool, stack_s: f64) -> Result<(), String> {
     let opts = microfrep_mesh::MeshOptions::new([[-1.0; 3], [1.0; 3]], grid.nx);
     let t = Instant::now();
     let (tris, cut) = ours.install(|| -> Result<_, String> {
-        let plan = microfrep_mesh::Plan::new(&expr, &opts).map_err(|e| e.to_string())?;
+        let plan = microfrep_mesh::Plan::new(&microfrep_core::Shape::from(&expr), &opts)
+            .map_err(|e| e.to_string())?;
         let mg = &plan.grid;
         let mut cutter = Cutter {
             grid: &grid,
@@ -278,7 +279,7 @@ fn stack_vs_mesh(ours: &rayon::ThreadPool, stack_s: f64) -> Result<(), String> {
         Ok((tris, cutter))
     })?;
     let total = t.elapsed().as_secs_f64();
-    let tape = Tape::new(&expr);
+    let tape = microfrep_core::Shape::new(expr.clone());
     let mut differ = 0usize;
     for (img, k) in cut.images.iter().zip([0, grid.layers / 2, grid.layers - 1]) {
         let direct =
@@ -305,16 +306,10 @@ fn stack_vs_mesh(ours: &rayon::ThreadPool, stack_s: f64) -> Result<(), String> {
 
 fn render_case(ours: &rayon::ThreadPool) -> Result<(), String> {
     let expr = shell_lattice();
-    let tape = Tape::new(&expr);
+    let tape = microfrep_core::Shape::new(expr.clone());
     let (lo, hi) = ([-1.0; 3], [1.0; 3]);
     let cam = Camera::fit(View::Iso, lo, hi, 1024, 1024);
-    let (s, img) = best(|| {
-        Ok(ours.install(|| {
-            // Building the set-operation tree is part of the work.
-            let csg = Csg::new(&expr);
-            ray_cast_with(&tape, Some(&csg), &cam, lo, hi)
-        }))
-    })?;
+    let (s, img) = best(|| Ok(ours.install(|| ray_cast(&tape, &cam, lo, hi))))?;
     let hit = img.data.chunks(3).filter(|c| c != &[250, 250, 250]).count();
     println!("RESULT render_shell_lattice_1024 microfrep_s={s:.3} hit_px={hit} threads={THREADS}");
     Ok(())

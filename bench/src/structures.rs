@@ -6,7 +6,8 @@
 //! cell; `ref_err` is its own error estimate.
 
 use microfrep_analysis::{measure, Grid};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::Expr;
+use microfrep_core::Shape;
 use std::time::Instant;
 
 fn load(body: &str) -> Result<Expr, String> {
@@ -20,7 +21,7 @@ fn load(body: &str) -> Result<Expr, String> {
 /// analysis' error estimate of it.
 fn fraction_at(e: &Expr, lo: f64, hi: f64, res: usize) -> Result<(f64, f64), String> {
     let grid = Grid::new([[lo; 3], [hi; 3]], res).map_err(|e| e.to_string())?;
-    let m = measure(&Tape::new(e), None, &grid, &|_, _| {});
+    let m = measure(&Shape::from(e), None, &grid, &|_, _| {});
     let v = grid.box_volume();
     Ok((m.volume.value / v, m.volume.error() / v))
 }

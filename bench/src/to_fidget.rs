@@ -41,7 +41,49 @@ fn lower(c: &mut Context, g: &Graph, map: &[FNode], n: Node) -> R {
         Node::Binary(op, a, b) => binary(c, op, m(a), m(b)),
         Node::PowI(a, k) => powi(c, m(a), k),
         Node::Select(cond, a, b) => c.if_nonzero_else(m(cond), m(a), m(b)).map_err(err),
+        Node::Set { op, a, b, alpha } => set(c, op, m(a), m(b), m(alpha)),
+        Node::Blend { op, args } => {
+            let [a, b, alpha, a0, a1, a2] = args.map(m);
+            let s = set(c, op, a, b, alpha)?;
+            let qa = c.div(a, a1).map_err(err)?;
+            let qa = c.square(qa).map_err(err)?;
+            let qb = c.div(b, a2).map_err(err)?;
+            let qb = c.square(qb).map_err(err)?;
+            let d = c.add(qa, qb).map_err(err)?;
+            let d = c.add(d, 1.0).map_err(err)?;
+            let d = c.div(a0, d).map_err(err)?;
+            c.add(s, d).map_err(err)
+        }
         Node::Field { .. } => Err("data-driven fields have no fidget equivalent".into()),
+    }
+}
+
+/// The R-function written out in fidget's operations.
+fn set(c: &mut Context, op: microfrep_core::SetOp, a: FNode, b: FNode, alpha: FNode) -> R {
+    let s = c.add(a, b).map_err(err)?;
+    let aa = c.square(a).map_err(err)?;
+    let bb = c.square(b).map_err(err)?;
+    let q = c.add(aa, bb).map_err(err)?;
+    let zero = c.get_const(alpha).map(|v| v == 0.0).unwrap_or(false);
+    let q = if zero {
+        q
+    } else {
+        let t = c.mul(alpha, 2.0).map_err(err)?;
+        let t = c.mul(t, a).map_err(err)?;
+        let t = c.mul(t, b).map_err(err)?;
+        c.sub(q, t).map_err(err)?
+    };
+    let r = c.sqrt(q).map_err(err)?;
+    let v = match op {
+        microfrep_core::SetOp::Union => c.add(s, r),
+        microfrep_core::SetOp::Intersection => c.sub(s, r),
+    }
+    .map_err(err)?;
+    if zero {
+        Ok(v)
+    } else {
+        let k = c.add(alpha, 1.0).map_err(err)?;
+        c.div(v, k).map_err(err)
     }
 }
 

@@ -400,7 +400,7 @@ fn euler_layer(table: &[i64; 256], below: &[u8], above: &[u8], nx: usize, ny: us
 mod tests {
     use super::*;
     use crate::grid::Grid;
-    use microfrep_core::{Expr, Tape};
+    use microfrep_core::{Expr, Shape};
 
     /// Compacting after every layer gives the same result as never.
     #[test]
@@ -410,7 +410,7 @@ mod tests {
         let k = 2.0 * std::f64::consts::PI / 0.5;
         let e = ((&p[0] * k).cos() + (&p[1] * k).cos() + (&p[2] * k).cos()) - 1.2
             + 0.3 * (&p[0] * 1.7).sin();
-        let t = Tape::new(&e);
+        let t = Shape::from(&e);
         let s = Sampler::new(&t, None, Grid::new([[0.0; 3], [2.0; 3]], 48).unwrap());
         let never = label(&s, &|_, _| {}, usize::MAX).unwrap();
         let always = label(&s, &|_, _| {}, 0).unwrap();

@@ -23,7 +23,7 @@
 //! - [`classify_box`]: the interval verdict on a box, shared by the samplers.
 
 use crate::error::{AnalysisError, Result};
-use microfrep_core::{BatchEval, Interval, IntervalEval, Tape};
+use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Tape};
 use rayon::prelude::*;
 
 /// Voxel label: outside the region (or outside the bounds).
@@ -164,9 +164,9 @@ pub fn classify_box(ev: &mut IntervalEval, lo: [f64; 3], hi: [f64; 3]) -> Class 
 }
 
 /// Voxel-centre occupancy of a model, optionally inside a region.
-pub struct Sampler<'t> {
-    solid: &'t Tape,
-    region: Option<&'t Tape>,
+pub struct Sampler {
+    solid: Tape,
+    region: Option<Tape>,
     pub grid: Grid,
 }
 
@@ -176,22 +176,23 @@ enum Fill {
     Each(Vec<u8>),
 }
 
-struct Scratch<'t> {
-    solid_iv: IntervalEval<'t>,
-    region_iv: Option<IntervalEval<'t>>,
-    solid_ev: BatchEval<'t>,
-    region_ev: Option<BatchEval<'t>>,
+struct Scratch {
+    solid_iv: IntervalEval,
+    region_iv: Option<IntervalEval>,
+    solid_ev: BatchEval,
+    region_ev: Option<BatchEval>,
     xs: Vec<f32>,
     ys: Vec<f32>,
     zs: Vec<f32>,
     vals: Vec<f32>,
 }
 
-impl<'t> Sampler<'t> {
-    pub fn new(solid: &'t Tape, region: Option<&'t Tape>, grid: Grid) -> Sampler<'t> {
+impl Sampler {
+    /// Occupancy of `solid` (inside `region`, if given) on `grid`.
+    pub fn new(solid: &Shape, region: Option<&Shape>, grid: Grid) -> Sampler {
         Sampler {
-            solid,
-            region,
+            solid: solid.tape().clone(),
+            region: region.map(|r| r.tape().clone()),
             grid,
         }
     }
@@ -257,12 +258,12 @@ impl<'t> Sampler<'t> {
         out
     }
 
-    fn scratch(&self) -> Scratch<'t> {
+    fn scratch(&self) -> Scratch {
         Scratch {
-            solid_iv: IntervalEval::new(self.solid),
-            region_iv: self.region.map(IntervalEval::new),
-            solid_ev: BatchEval::new(self.solid),
-            region_ev: self.region.map(BatchEval::new),
+            solid_iv: IntervalEval::new(&self.solid),
+            region_iv: self.region.as_ref().map(IntervalEval::new),
+            solid_ev: BatchEval::new(&self.solid),
+            region_ev: self.region.as_ref().map(BatchEval::new),
             xs: Vec::new(),
             ys: Vec::new(),
             zs: Vec::new(),

@@ -4,11 +4,11 @@
 //!
 //! ```
 //! use microfrep_analysis::{analyze, AnalyzeOptions, Grid};
-//! use microfrep_core::{prims, Expr, Tape};
+//! use microfrep_core::{prims, Expr, Shape};
 //! let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
 //! let grid = Grid::new([[-1.0; 3], [1.0; 3]], 64).unwrap();
 //! let opts = AnalyzeOptions { thickness: false, ..AnalyzeOptions::default() };
-//! let r = analyze(&Tape::new(&ball), None, grid, &opts, &|_, _, _| {}).unwrap();
+//! let r = analyze(&Shape::new(ball), None, grid, &opts, &|_, _, _| {}).unwrap();
 //! let exact = 4.0 / 3.0 * std::f64::consts::PI;
 //! assert!((r.volume() - exact).abs() < 3.0 * r.volume_error() + 1e-3);
 //! assert_eq!(r.connectivity.unwrap().surface_euler(), 2);

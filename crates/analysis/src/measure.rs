@@ -35,7 +35,7 @@
 use crate::crease::{creased, no_nan, sample_centers, split};
 use crate::grid::{classify_box, Class, Grid, Progress};
 use crate::volume::{measure_leaves, Estimate, Leaf, LEAF_BATCH};
-use microfrep_core::{BatchEval, IntervalEval, Tape};
+use microfrep_core::{BatchEval, IntervalEval, Shape, Tape};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -65,11 +65,11 @@ pub struct Measures {
 
 pub(crate) use microfrep_core::geom::KUHN_TETS as TETS;
 
-pub(crate) struct Scratch<'t> {
-    pub(crate) solid_iv: IntervalEval<'t>,
-    pub(crate) region_iv: Option<IntervalEval<'t>>,
-    pub(crate) solid_ev: BatchEval<'t>,
-    pub(crate) region_ev: Option<BatchEval<'t>>,
+pub(crate) struct Scratch {
+    pub(crate) solid_iv: IntervalEval,
+    pub(crate) region_iv: Option<IntervalEval>,
+    pub(crate) solid_ev: BatchEval,
+    pub(crate) region_ev: Option<BatchEval>,
     pub(crate) xs: Vec<f32>,
     pub(crate) ys: Vec<f32>,
     pub(crate) zs: Vec<f32>,
@@ -82,7 +82,8 @@ pub(crate) struct Scratch<'t> {
 
 /// Measures the solid `f >= 0` (inside `region >= 0` when given) on `grid`.
 /// `progress(done, total)` counts bricks.
-pub fn measure(solid: &Tape, region: Option<&Tape>, grid: &Grid, progress: Progress) -> Measures {
+pub fn measure(solid: &Shape, region: Option<&Shape>, grid: &Grid, progress: Progress) -> Measures {
+    let (solid, region) = (solid.tape(), region.map(|r| r.tape()));
     let nb = grid.dims.map(|d| d.div_ceil(BRICK));
     let total = nb[0] * nb[1] * nb[2];
     // First pass: measure the bricks without creased cells, count the
@@ -375,8 +376,8 @@ pub const MAX_DEPTH: u32 = 4;
 /// estimates).
 const REFINE_BUDGET: f64 = 8.0;
 
-pub(crate) struct Ctx<'a, 't> {
-    pub(crate) s: &'a mut Scratch<'t>,
+pub(crate) struct Ctx<'a> {
+    pub(crate) s: &'a mut Scratch,
     pub(crate) with_region: bool,
     pub(crate) eval_solid: bool,
     /// The solid's value where it is not evaluated (proven full or empty):

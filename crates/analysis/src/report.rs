@@ -6,7 +6,7 @@ use crate::error::{AnalysisError, Result};
 use crate::grid::{Grid, Sampler};
 use crate::measure::{measure, Measures};
 use crate::thickness::{thickness, Thickness, ThicknessOptions};
-use microfrep_core::Tape;
+use microfrep_core::Shape;
 use std::time::Instant;
 
 /// What to compute, and within which memory.
@@ -140,8 +140,8 @@ impl Report {
 /// Analyses the solid `f >= 0` of `solid` (inside `region >= 0` when given)
 /// on `grid`. `progress(stage, done, total)`.
 pub fn analyze(
-    solid: &Tape,
-    region: Option<&Tape>,
+    solid: &Shape,
+    region: Option<&Shape>,
     grid: Grid,
     opts: &AnalyzeOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),

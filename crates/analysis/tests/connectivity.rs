@@ -5,12 +5,12 @@ use microfrep_analysis::connectivity::{connectivity, Connectivity};
 use microfrep_analysis::{Grid, Sampler};
 use microfrep_core::frep::{subtraction, union};
 use microfrep_core::prims::{sphere, torus, v3};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 use microfrep_structures::lattice::{rod_lattice, Slabs};
 
 fn run(e: &Expr, region: Option<&Expr>, bounds: [[f64; 3]; 2], n: usize) -> Connectivity {
-    let t = Tape::new(e);
-    let r = region.map(Tape::new);
+    let t = Shape::from(e);
+    let r = region.map(Shape::from);
     let s = Sampler::new(&t, r.as_ref(), Grid::new(bounds, n).unwrap());
     connectivity(&s, &|_, _| {}).unwrap()
 }

@@ -3,7 +3,7 @@
 use microfrep_analysis::grid::MAX_RESOLUTION;
 use microfrep_analysis::{analyze, AnalysisError, AnalyzeOptions, Grid};
 use microfrep_core::prims::{sphere, v3};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 
 const B: [[f64; 3]; 2] = [[-1.0; 3], [1.0; 3]];
 
@@ -51,7 +51,7 @@ fn grid_counts_are_even_and_tile_the_box() {
 #[test]
 fn jobs_over_the_memory_limit_are_refused() {
     let p = Expr::xyz();
-    let t = Tape::new(&sphere(&p, &v3([0.0; 3]), 1.0));
+    let t = Shape::from(&sphere(&p, &v3([0.0; 3]), 1.0));
     let opts = AnalyzeOptions {
         memory_limit: 1 << 20,
         ..AnalyzeOptions::default()

@@ -19,7 +19,7 @@
 
 use microfrep_analysis::grid::{Grid, Sampler, PORE, SOLID};
 use microfrep_analysis::thickness::local_thickness_field;
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 use microfrep_structures::examples::toriball;
 use microfrep_structures::lattice::{rod_lattice, Slabs};
 use std::path::{Path, PathBuf};
@@ -114,7 +114,7 @@ fn max(v: &[f32]) -> f64 {
 }
 
 fn compare(py: &Path, tag: &str, model: &Expr, bounds: [[f64; 3]; 2], n: usize) {
-    let tape = Tape::new(model);
+    let tape = Shape::from(model);
     let grid = Grid::new(bounds, n).unwrap();
     let dims = grid.dims;
     let labels = Sampler::new(&tape, None, grid).all(&|_, _| {});

@@ -5,7 +5,7 @@ use microfrep_analysis::thickness::PhaseThickness;
 use microfrep_analysis::{analyze, AnalyzeOptions, Grid};
 use microfrep_core::frep::subtraction;
 use microfrep_core::prims::{sphere, v3};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 use std::f64::consts::PI;
 
 #[test]
@@ -16,7 +16,7 @@ fn hollow_ball_report() {
         &sphere(&p, &v3([0.0; 3]), 0.5),
         1.0,
     );
-    let t = Tape::new(&e);
+    let t = Shape::from(&e);
     let g = Grid::new([[-1.1; 3], [1.1; 3]], 64).unwrap();
     let r = analyze(&t, None, g, &AnalyzeOptions::default(), &|_, _, _| {}).unwrap();
     let vol = 4.0 / 3.0 * PI * (1.0 - 0.125);

@@ -11,7 +11,7 @@ use microfrep_analysis::thickness::{
 };
 use microfrep_analysis::AnalysisError;
 use microfrep_core::prims::{cylinder, v3};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 use microfrep_structures::lattice::{rod_lattice, Slabs};
 
 /// Small deterministic generator (xorshift64*).
@@ -247,7 +247,7 @@ fn sampled_in(
     resolution: usize,
     opts: &ThicknessOptions,
 ) -> Thickness {
-    let tape = Tape::new(model);
+    let tape = Shape::from(model);
     let grid = Grid::new(bounds, resolution).unwrap();
     let sampler = Sampler::new(&tape, None, grid);
     let last = std::sync::Mutex::new((0, 0, 0));

@@ -8,7 +8,6 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use microfrep_analysis::thickness::{PhaseThickness, Thickness, ThicknessStats};
 use microfrep_analysis::{analyze, AnalyzeOptions, Grid, Report, Stage};
-use microfrep_core::Tape;
 use serde_json::{json, Value};
 use std::io::IsTerminal;
 use std::sync::Mutex;
@@ -50,7 +49,7 @@ pub struct AnalyzeArgs {
 
 pub fn run(a: AnalyzeArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (lo, hi) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
+    let (lo, hi) = bounds(&m, a.bounds.as_deref())?;
     let b = [lo, hi];
     let grid = match (a.resolution, a.voxel) {
         (Some(n), _) => Grid::new(b, n)?,
@@ -61,8 +60,6 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
         Some(r) => Some(model::load(r).with_context(|| format!("--region '{r}'"))?),
         None => None,
     };
-    let tape = Tape::new(&m.expr);
-    let region_tape = region.as_ref().map(|r| Tape::new(&r.expr));
     let mut opts = AnalyzeOptions {
         connectivity: !a.no_connectivity,
         thickness: !a.no_thickness,
@@ -93,7 +90,13 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
             pb.set_position(done as u64);
         }
     };
-    let report = analyze(&tape, region_tape.as_ref(), grid, &opts, &progress)?;
+    let report = analyze(
+        &m.shape,
+        region.as_ref().map(|r| &r.shape),
+        grid,
+        &opts,
+        &progress,
+    )?;
     if let Some(pb) = bar {
         pb.finish_and_clear();
     }

@@ -1,11 +1,11 @@
 //! `microfrep mesh`: triangle mesh of a model to STL, OBJ, PLY or 3MF.
 
 use crate::model;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use microfrep_mesh::write::{stream_mesh, stream_temp_paths, write_mesh, Format};
-use microfrep_mesh::{bounds, check, memory, CellMethod, Grid, MeshOptions, Plan};
+use microfrep_mesh::{check, memory, CellMethod, Grid, MeshOptions, Plan};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -73,7 +73,10 @@ pub fn run(a: MeshArgs) -> Result<()> {
             let (lo, hi) = crate::boxarg::parse_box("--bounds", s)?;
             [lo, hi]
         }
-        None => bounds::model_bounds_of(&m.expr).with_context(|| format!("model '{}'", a.model))?,
+        None => {
+            let (lo, hi) = crate::slice_cmd::bounds(&m, None)?;
+            [lo, hi]
+        }
     };
     let resolution = match (a.resolution, a.voxel) {
         (Some(n), _) => n,
@@ -85,7 +88,7 @@ pub fn run(a: MeshArgs) -> Result<()> {
         Cells::Cubes => CellMethod::Cubes,
         Cells::Tets => CellMethod::Tetrahedra,
     };
-    let plan = Plan::new(&m.expr, &opts)?;
+    let plan = Plan::new(&m.shape, &opts)?;
 
     let est = memory::estimate(&plan);
     let streamable = matches!(format, Format::Stl | Format::Ply);

@@ -10,6 +10,8 @@ use std::sync::Arc;
 /// A loaded model.
 pub struct Model {
     pub expr: Expr,
+    /// The compiled model every consumer takes.
+    pub shape: microfrep_core::Shape,
     /// For HyperFun models: the lowered model with its error output.
     pub hf: Option<microfrep_hyperfun::lower::Model>,
 }
@@ -37,8 +39,12 @@ pub fn load_with(spec: &str, opts: &Options) -> Result<Model> {
         if opts.object.is_some() || !opts.params.is_empty() {
             bail!("--object and --param apply to HyperFun (.hf) models only");
         }
+        let expr = (ex.build)();
+        let (lo, hi) = ex.bounds;
         return Ok(Model {
-            expr: (ex.build)(),
+            shape: microfrep_core::Shape::new(expr.clone())
+                .with_bounds(microfrep_core::Bounds::new(lo, hi)),
+            expr,
             hf: None,
         });
     }
@@ -79,6 +85,7 @@ fn load_hf(path: &str, opts: &Options) -> Result<Model> {
     }
     Ok(Model {
         expr: m.value.clone(),
+        shape: m.shape(),
         hf: Some(m),
     })
 }

@@ -4,8 +4,7 @@ use crate::model;
 use crate::slice_cmd::bounds;
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use microfrep_core::Tape;
-use microfrep_render::{cutaway, ray_cast_with, section, Camera, Csg, Plane, View};
+use microfrep_render::{cutaway, ray_cast, section, Camera, Plane, View};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -48,24 +47,18 @@ fn size(s: &str) -> Result<(usize, usize)> {
 
 pub fn run(a: RenderArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (min, max) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
+    let (min, max) = bounds(&m, a.bounds.as_deref())?;
     let (w, h) = size(&a.size)?;
     let img = match a.section {
         Some(_) if a.cutaway => bail!("--section and --cutaway do not combine"),
-        Some(plane) => section(&Tape::new(&m.expr), plane, min, max, w, h),
+        Some(plane) => section(&m.shape, plane, min, max, w, h),
         None => {
-            let e = if a.cutaway {
-                cutaway(&m.expr, a.view, min, max)
+            let s = if a.cutaway {
+                cutaway(&m.shape, a.view, min, max)
             } else {
-                m.expr
+                m.shape
             };
-            ray_cast_with(
-                &Tape::new(&e),
-                Some(&Csg::new(&e)),
-                &Camera::fit(a.view, min, max, w, h),
-                min,
-                max,
-            )
+            ray_cast(&s, &Camera::fit(a.view, min, max, w, h), min, max)
         }
     };
     img.save_png(&a.output)?;

@@ -4,7 +4,6 @@ use crate::model;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use microfrep_core::Tape;
 use microfrep_fab::{write_stack, Format, SliceGrid};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -39,27 +38,19 @@ pub struct SliceArgs {
     aa: bool,
 }
 
-/// The box from `--bounds`, else the built-in example's own, else what
-/// interval analysis proves about the model `expr`.
-pub fn bounds(
-    model: &str,
-    expr: &microfrep_core::Expr,
-    arg: Option<&str>,
-) -> Result<([f64; 3], [f64; 3])> {
+/// The box from `--bounds`, else the model's own (a built-in example's
+/// box, else what interval analysis proves): one rule for every verb.
+pub fn bounds(m: &model::Model, arg: Option<&str>) -> Result<([f64; 3], [f64; 3])> {
     if let Some(s) = arg {
         return crate::boxarg::parse_box("--bounds", s);
     }
-    match microfrep_structures::examples::by_name(model) {
-        Some(e) => Ok(e.bounds),
-        None => microfrep_mesh::bounds::model_bounds_of(expr)
-            .map(|b| (b[0], b[1]))
-            .with_context(|| format!("model '{model}'")),
-    }
+    let b = m.shape.bounds().context("the model's bounds")?;
+    Ok((b.min, b.max))
 }
 
 pub fn run(a: SliceArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (min, max) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
+    let (min, max) = bounds(&m, a.bounds.as_deref())?;
     let grid = SliceGrid::new(min, max, a.layer, a.pixel)?;
     let format = match a.format {
         SliceFormat::Png => Format::Png { aa: a.aa },
@@ -68,7 +59,6 @@ pub fn run(a: SliceArgs) -> Result<()> {
         SliceFormat::Svg => Format::Svg,
         SliceFormat::Cli => Format::Cli,
     };
-    let tape = Tape::new(&m.expr);
     let bar = ProgressBar::with_draw_target(
         Some(grid.layers as u64),
         if std::io::stderr().is_terminal() {
@@ -81,7 +71,7 @@ pub fn run(a: SliceArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:40} {pos}/{len} layers {elapsed} (eta {eta})")
             .expect("static template"),
     );
-    write_stack(&tape, &grid, format, &a.output, &|| bar.inc(1))?;
+    write_stack(&m.shape, &grid, format, &a.output, &|| bar.inc(1))?;
     bar.finish_and_clear();
     // HyperFun run-time errors at the pixel centres: those pixels are NaN,
     // i.e. empty (documented in the README); counted for the summary.

@@ -4,7 +4,6 @@ use crate::model;
 use crate::slice_cmd::bounds;
 use anyhow::Result;
 use clap::Args;
-use microfrep_core::Tape;
 use microfrep_fab::voxels::{write_voxels, VoxelGrid};
 use std::path::PathBuf;
 
@@ -28,9 +27,9 @@ pub struct VoxelsArgs {
 
 pub fn run(a: VoxelsArgs) -> Result<()> {
     let m = model::load(&a.model)?;
-    let (min, max) = bounds(&a.model, &m.expr, a.bounds.as_deref())?;
+    let (min, max) = bounds(&m, a.bounds.as_deref())?;
     let grid = VoxelGrid::new(min, max, a.voxel)?;
-    write_voxels(&Tape::new(&m.expr), &grid, a.field, &a.output)?;
+    write_voxels(&m.shape, &grid, a.field, &a.output)?;
     let [nx, ny, nz] = grid.dims;
     eprintln!("{nx} x {ny} x {nz} voxels -> {}", a.output.display());
     Ok(())

@@ -6,7 +6,7 @@
 //! folds constants, so how a model was written does not change what runs.
 
 use crate::field::Field;
-use crate::ops::{BinaryOp, UnaryOp};
+use crate::ops::{BinaryOp, SetOp, UnaryOp};
 use std::collections::HashMap;
 use std::fmt;
 use std::sync::Arc;
@@ -35,6 +35,27 @@ pub enum ExprNode {
     PowI(Expr, i32),
     /// `cond != 0 ? then : else`.
     Select(Expr, Expr, Expr),
+    /// An R-function set operation of `a` and `b` with parameter `alpha`
+    /// (see [`SetOp`]); `alpha = 1` is built as `min`/`max` instead.
+    Set {
+        /// Union or intersection.
+        op: SetOp,
+        /// First argument.
+        a: Expr,
+        /// Second argument.
+        b: Expr,
+        /// The R-function parameter, in `[-1, 1]` for the sign laws to hold.
+        alpha: Expr,
+    },
+    /// A blended set operation (Pasko et al. Eq. 7): the R-function plus
+    /// the displacement `a0 / (1 + (a/a1)^2 + (b/a2)^2)`.
+    Blend {
+        /// Union or intersection (a blended subtraction is an intersection
+        /// with the negated second argument).
+        op: SetOp,
+        /// `[a, b, alpha, a0, a1, a2]`.
+        args: Box<[Expr; 6]>,
+    },
     /// A data-driven field at mapped coordinates. `comp` 0 is the value,
     /// 1..=3 the partial derivatives along x, y, z.
     Field {
@@ -58,6 +79,10 @@ impl fmt::Debug for Expr {
             ExprNode::Binary(op, a, b) => write!(f, "{}({a:?}, {b:?})", op.name()),
             ExprNode::PowI(a, n) => write!(f, "powi({a:?}, {n})"),
             ExprNode::Select(c, a, b) => write!(f, "select({c:?}, {a:?}, {b:?})"),
+            ExprNode::Set { op, a, b, alpha } => {
+                write!(f, "{}({a:?}, {b:?}, {alpha:?})", op.name())
+            }
+            ExprNode::Blend { op, args } => write!(f, "blend_{}{:?}", op.name(), &args[..]),
             ExprNode::Field {
                 field, comp, args, ..
             } => write!(
@@ -298,6 +323,16 @@ impl Expr {
                 a.remap_memo(p, memo),
                 b.remap_memo(p, memo),
             ),
+            ExprNode::Set { op, a, b, alpha } => Expr::set(
+                *op,
+                &a.remap_memo(p, memo),
+                &b.remap_memo(p, memo),
+                alpha.remap_memo(p, memo),
+            ),
+            ExprNode::Blend { op, args } => {
+                let m: [Expr; 6] = std::array::from_fn(|i| args[i].remap_memo(p, memo));
+                Expr::blend(*op, m)
+            }
             ExprNode::Field { field, comp, args } => Expr::field_comp(
                 field.clone(),
                 *comp,
@@ -334,9 +369,76 @@ impl Expr {
             ExprNode::Unary(_, a) | ExprNode::PowI(a, _) => vec![a],
             ExprNode::Binary(_, a, b) => vec![a, b],
             ExprNode::Select(c, a, b) => vec![c, a, b],
+            ExprNode::Set { a, b, alpha, .. } => vec![a, b, alpha],
+            ExprNode::Blend { args, .. } => args.iter().collect(),
             ExprNode::Field { args, .. } => args.iter().collect(),
         }
     }
+
+    /// The R-function set operation `op` of `a` and `b` with parameter
+    /// `alpha` (any expression; `alpha = 1` gives exact `max`/`min`).
+    pub fn set(op: SetOp, a: &Expr, b: &Expr, alpha: impl Into<Expr>) -> Expr {
+        let alpha = alpha.into();
+        match (alpha.as_const(), a.as_const(), b.as_const()) {
+            (Some(1.0), _, _) => match op {
+                SetOp::Union => a.max(b),
+                SetOp::Intersection => a.min(b),
+            },
+            (Some(al), Some(x), Some(y)) => Expr::constant(op.apply(x, y, al)),
+            _ => Expr::new(ExprNode::Set {
+                op,
+                a: a.clone(),
+                b: b.clone(),
+                alpha,
+            }),
+        }
+    }
+
+    /// A blended set operation from `[a, b, alpha, a0, a1, a2]` (see
+    /// [`ExprNode::Blend`]).
+    pub fn blend(op: SetOp, args: [Expr; 6]) -> Expr {
+        if args.iter().all(|a| a.as_const().is_some()) {
+            let [a, b, alpha, a0, a1, a2] = &args;
+            return Expr::set(op, a, b, alpha.clone()) + blend_displacement(a, b, a0, a1, a2);
+        }
+        Expr::new(ExprNode::Blend {
+            op,
+            args: Box::new(args),
+        })
+    }
+
+    /// The node written out with arithmetic only (identical values): the
+    /// meaning of a set or blend node, for symbolic differentiation and for
+    /// consumers that do not know set nodes. Other nodes are returned as
+    /// they are.
+    pub fn expand(&self) -> Expr {
+        match self.node() {
+            ExprNode::Set { op, a, b, alpha } => expand_set(*op, a, b, alpha),
+            ExprNode::Blend { op, args } => {
+                let [a, b, alpha, a0, a1, a2] = &**args;
+                Expr::set(*op, a, b, alpha.clone()) + blend_displacement(a, b, a0, a1, a2)
+            }
+            _ => self.clone(),
+        }
+    }
+}
+
+/// The R-function written out, in the operation order of [`SetOp::apply`].
+fn expand_set(op: SetOp, a: &Expr, b: &Expr, alpha: &Expr) -> Expr {
+    let s = a + b;
+    let sign = |r: Expr| match op {
+        SetOp::Union => &s + r,
+        SetOp::Intersection => &s - r,
+    };
+    if alpha.as_const() == Some(0.0) {
+        return sign((a.square() + b.square()).sqrt());
+    }
+    sign((a.square() + b.square() - 2.0 * alpha * a * b).sqrt()) / (1.0 + alpha)
+}
+
+/// `a0 / (1 + (a/a1)^2 + (b/a2)^2)`: the blend displacement of Eq. 7.
+pub fn blend_displacement(a: &Expr, b: &Expr, a0: &Expr, a1: &Expr, a2: &Expr) -> Expr {
+    a0 / (1.0 + (a / a1).square() + (b / a2).square())
 }
 
 impl From<f64> for Expr {

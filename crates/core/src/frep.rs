@@ -5,47 +5,24 @@
 //! Eqs. 2-3, 10-14; Park et al. section 2.2). Every numeric parameter is an
 //! [`Expr`], so it may vary in space.
 
-use crate::expr::Expr;
+use crate::expr::{blend_displacement, Expr};
+use crate::ops::SetOp;
 
-/// `sqrt(f1^2 + f2^2 - 2 alpha f1 f2)`, with the alpha term dropped at the
-/// common alpha = 0 so the graph stays minimal.
-fn r_root(f1: &Expr, f2: &Expr, alpha: &Expr) -> Expr {
-    let s = f1.square() + f2.square();
-    match alpha.as_const() {
-        Some(0.0) => s.sqrt(),
-        _ => (s - 2.0 * alpha * f1 * f2).sqrt(),
-    }
-}
-
-fn scale_alpha(e: Expr, alpha: &Expr) -> Expr {
-    match alpha.as_const() {
-        Some(0.0) => e,
-        _ => e / (1.0 + alpha),
-    }
-}
-
-/// R-function union `(f1 + f2 + sqrt(f1^2 + f2^2 - 2 a f1 f2)) / (1 + a)`;
-/// `alpha = 1` is exactly `max`, `alpha = 0` is HyperFun's `|`.
+/// R-function union `(f1 + f2 + sqrt(f1^2 + f2^2 - 2 a f1 f2)) / (1 + a)`
+/// as a set node of the graph; `alpha = 1` is exactly `max`, `alpha = 0` is
+/// HyperFun's `|`.
 ///
 /// For alpha in [0, 1] the result is `>= 0` exactly when either argument is
 /// (tested for |f1|/|f2| up to 1e14; near 1/eps the smaller argument is lost
 /// to rounding in `f1 + f2`). The same holds for the intersection and
 /// subtraction.
 pub fn union(f1: &Expr, f2: &Expr, alpha: impl Into<Expr>) -> Expr {
-    let alpha = alpha.into();
-    if alpha.as_const() == Some(1.0) {
-        return f1.max(f2);
-    }
-    scale_alpha(f1 + f2 + r_root(f1, f2, &alpha), &alpha)
+    Expr::set(SetOp::Union, f1, f2, alpha)
 }
 
 /// R-function intersection; `alpha = 1` is exactly `min`.
 pub fn intersection(f1: &Expr, f2: &Expr, alpha: impl Into<Expr>) -> Expr {
-    let alpha = alpha.into();
-    if alpha.as_const() == Some(1.0) {
-        return f1.min(f2);
-    }
-    scale_alpha(f1 + f2 - r_root(f1, f2, &alpha), &alpha)
+    Expr::set(SetOp::Intersection, f1, f2, alpha)
 }
 
 /// `f1 \ f2 = f1 & (-f2)`.
@@ -93,24 +70,37 @@ impl Blend {
     }
     /// The displacement `a0 / (1 + (f1/a1)^2 + (f2/a2)^2)`.
     pub fn displacement(&self, f1: &Expr, f2: &Expr) -> Expr {
-        &self.a0 / (1.0 + (f1 / &self.a1).square() + (f2 / &self.a2).square())
+        blend_displacement(f1, f2, &self.a0, &self.a1, &self.a2)
+    }
+
+    fn node(&self, op: SetOp, f1: &Expr, f2: &Expr, alpha: Expr) -> Expr {
+        Expr::blend(
+            op,
+            [
+                f1.clone(),
+                f2.clone(),
+                alpha,
+                self.a0.clone(),
+                self.a1.clone(),
+                self.a2.clone(),
+            ],
+        )
     }
 }
 
-/// Blended union (Eq. 7 with `|a`).
+/// Blended union (Eq. 7 with `|a`), a blend node of the graph.
 pub fn blend_union(f1: &Expr, f2: &Expr, b: &Blend, alpha: impl Into<Expr>) -> Expr {
-    union(f1, f2, alpha) + b.displacement(f1, f2)
+    b.node(SetOp::Union, f1, f2, alpha.into())
 }
 
 /// Blended intersection (Eq. 7).
 pub fn blend_intersection(f1: &Expr, f2: &Expr, b: &Blend, alpha: impl Into<Expr>) -> Expr {
-    intersection(f1, f2, alpha) + b.displacement(f1, f2)
+    b.node(SetOp::Intersection, f1, f2, alpha.into())
 }
 
 /// Blended subtraction: blended intersection with `-f2`.
 pub fn blend_subtraction(f1: &Expr, f2: &Expr, b: &Blend, alpha: impl Into<Expr>) -> Expr {
-    let n = f2.neg();
-    intersection(f1, &n, alpha) + b.displacement(f1, &n)
+    b.node(SetOp::Intersection, f1, &f2.neg(), alpha.into())
 }
 
 /// Constant offset `f + d` (Eq. 13): `d > 0` grows the solid.

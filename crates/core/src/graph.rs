@@ -7,7 +7,7 @@
 
 use crate::expr::{Axis, Expr, ExprNode};
 use crate::field::Field;
-use crate::ops::{BinaryOp, UnaryOp};
+use crate::ops::{BinaryOp, SetOp, UnaryOp};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -26,11 +26,38 @@ pub enum Node {
     Binary(BinaryOp, NodeId, NodeId),
     PowI(NodeId, i32),
     Select(NodeId, NodeId, NodeId),
+    /// R-function set operation: `op(a, b)` with parameter `alpha`.
+    Set {
+        op: SetOp,
+        a: NodeId,
+        b: NodeId,
+        alpha: NodeId,
+    },
+    /// Blended set operation over `[a, b, alpha, a0, a1, a2]`.
+    Blend {
+        op: SetOp,
+        args: [NodeId; 6],
+    },
     Field {
         field: u32,
         comp: u8,
         args: [NodeId; 3],
     },
+}
+
+impl Node {
+    /// The nodes this one reads, in evaluation order.
+    pub fn children(&self) -> Vec<NodeId> {
+        match *self {
+            Node::Var(_) | Node::Const(_) | Node::Param(_) => vec![],
+            Node::Unary(_, a) | Node::PowI(a, _) => vec![a],
+            Node::Binary(_, a, b) => vec![a, b],
+            Node::Select(c, a, b) => vec![c, a, b],
+            Node::Set { a, b, alpha, .. } => vec![a, b, alpha],
+            Node::Blend { args, .. } => args.to_vec(),
+            Node::Field { args, .. } => args.to_vec(),
+        }
+    }
 }
 
 /// A named parameter: its name and default value.
@@ -133,6 +160,14 @@ impl Graph {
                     let (c, a, b) = (get(c), get(a), get(b));
                     self.select(c, a, b)
                 }
+                ExprNode::Set { op, a, b, alpha } => {
+                    let (a, b, alpha) = (get(a), get(b), get(alpha));
+                    self.set(*op, a, b, alpha)
+                }
+                ExprNode::Blend { op, args } => {
+                    let args = std::array::from_fn(|i| get(&args[i]));
+                    self.intern(Node::Blend { op: *op, args })
+                }
                 ExprNode::Field { field, comp, args } => {
                     let args = [get(&args[0]), get(&args[1]), get(&args[2])];
                     let fi = match self.fields.iter().position(|f| Arc::ptr_eq(f, field)) {
@@ -221,6 +256,34 @@ impl Graph {
             2 => self.unary(UnaryOp::Square, a),
             _ => self.intern(Node::PowI(a, n)),
         }
+    }
+
+    /// An R-function node; `alpha = 1` becomes `max`/`min`, constants fold.
+    pub fn set(&mut self, op: SetOp, a: NodeId, b: NodeId, alpha: NodeId) -> NodeId {
+        match (
+            self.const_value(alpha),
+            self.const_value(a),
+            self.const_value(b),
+        ) {
+            (Some(1.0), _, _) => {
+                let m = match op {
+                    SetOp::Union => BinaryOp::Max,
+                    SetOp::Intersection => BinaryOp::Min,
+                };
+                return self.binary(m, a, b);
+            }
+            (Some(al), Some(x), Some(y)) => return self.constant(op.apply(x, y, al)),
+            _ => {}
+        }
+        // Both R-functions are symmetric in their arguments, and bit for bit
+        // so at alpha = 0 (`a + b`, `a*a + b*b` commute exactly; the
+        // `2 alpha a b` term would not).
+        let (a, b) = if b < a && self.const_value(alpha) == Some(0.0) {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        self.intern(Node::Set { op, a, b, alpha })
     }
 
     pub fn select(&mut self, c: NodeId, a: NodeId, b: NodeId) -> NodeId {

@@ -13,7 +13,6 @@
 //!
 //! Sign convention everywhere: inside is `f >= 0`.
 
-pub mod csg;
 pub mod eval;
 pub mod expr;
 pub mod field;
@@ -25,18 +24,21 @@ pub mod interval;
 pub mod noise;
 pub mod ops;
 pub mod prims;
+pub mod shape;
 pub mod simd_math;
 mod symbolic;
 pub mod tape;
 pub mod transform;
 
 pub use eval::{
-    eval_grid_par, eval_points_par, BatchEval, GradBatchEval, GradEval, IntervalEval, PointEval,
-    BLOCK,
+    eval_grid_par, eval_points_par, BatchEval, BatchEvaluator, Function, GradBatchEval,
+    GradBatchEvaluator, GradEval, GradEvaluator, IntervalEval, IntervalEvaluator, PointEval,
+    PointEvaluator, BLOCK,
 };
 pub use expr::{Axis, Expr, ExprNode};
 pub use field::{Field, GridField};
 pub use graph::{Graph, Node, NodeId};
 pub use interval::Interval;
-pub use ops::{BinaryOp, UnaryOp};
-pub use tape::Tape;
+pub use ops::{BinaryOp, SetOp, UnaryOp};
+pub use shape::{Bounds, BoundsError, ErrorCensus, ErrorSource, RuntimeError, Shape};
+pub use tape::{Op, Tape, ValueId};

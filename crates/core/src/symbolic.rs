@@ -73,6 +73,7 @@ fn grad(e: &Expr, memo: &mut HashMap<*const ExprNode, Grad>) -> Grad {
             let da = grad(a, memo);
             scale(&da, &(*n as f64 * a.powi(n - 1)))
         }
+        ExprNode::Set { .. } | ExprNode::Blend { .. } => grad(&e.expand(), memo),
         ExprNode::Select(c, a, b) => {
             let (da, db) = (grad(a, memo), grad(b, memo));
             std::array::from_fn(|i| Expr::select(c.clone(), da[i].clone(), db[i].clone()))

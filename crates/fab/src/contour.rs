@@ -10,7 +10,7 @@
 
 use crate::grid::SliceGrid;
 use crate::raster::LayerValues;
-use microfrep_core::{PointEval, Tape};
+use microfrep_core::{PointEval, Shape};
 use std::collections::HashMap;
 
 /// Illinois steps per vertex: enough for about 1e-7 pixel on smooth edges.
@@ -34,7 +34,7 @@ fn unkey(k: u64) -> (i64, i64, bool) {
 }
 
 /// Closed loops of the layer's zero set, solid on the left.
-pub fn contours(tape: &Tape, grid: &SliceGrid, layer: &LayerValues) -> Vec<Polygon> {
+pub fn contours(shape: &Shape, grid: &SliceGrid, layer: &LayerValues) -> Vec<Polygon> {
     let (nx, ny) = (layer.nx as i64, layer.ny as i64);
     let inside = |i: i64, j: i64| -> bool {
         i >= 0 && j >= 0 && i < nx && j < ny && layer.inside(i as usize, j as usize)
@@ -76,7 +76,7 @@ pub fn contours(tape: &Tape, grid: &SliceGrid, layer: &LayerValues) -> Vec<Polyg
             }
         }
     }
-    let mut pe = PointEval::new(tape);
+    let mut pe = PointEval::new(shape.tape());
     let mut loops = Vec::new();
     for s in starts {
         if !next.contains_key(&s) {

@@ -3,7 +3,7 @@
 //! straight line `f + g.(p - c) = 0` across the pixel).
 
 use crate::raster::LayerValues;
-use microfrep_core::{GradEval, Tape};
+use microfrep_core::{GradEval, Shape};
 use rayon::prelude::*;
 
 /// Area fraction of the square `[-h/2, h/2]^2` where `f + g.d >= 0`, exact
@@ -38,11 +38,11 @@ pub fn box_coverage(f: f64, g: [f64; 2], h: f64) -> f64 {
 /// 8-bit coverage of every pixel of a layer (row 0 at the lowest y).
 /// Pixels far from the surface by a finite-difference estimate take their
 /// centre's side; near ones get the exact gradient and [`box_coverage`].
-pub fn coverage(tape: &Tape, layer: &LayerValues, pixel: f64, min: [f64; 2]) -> Vec<u8> {
+pub fn coverage(shape: &Shape, layer: &LayerValues, pixel: f64, min: [f64; 2]) -> Vec<u8> {
     let nx = layer.nx;
     let mut out = vec![0u8; nx * layer.ny];
     out.par_chunks_mut(nx).enumerate().for_each_init(
-        || GradEval::new(tape),
+        || GradEval::new(shape.tape()),
         |ge, (j, row)| {
             for (i, px) in row.iter_mut().enumerate() {
                 let v = layer.at(i, j);

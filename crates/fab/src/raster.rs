@@ -3,7 +3,7 @@
 //! sampled, 256 pixels per batch.
 
 use crate::grid::SliceGrid;
-use microfrep_core::{BatchEval, Interval, IntervalEval, Tape};
+use microfrep_core::{BatchEval, Interval, IntervalEval, Shape};
 use rayon::prelude::*;
 
 /// Side of the tiles that rows of work are cut into.
@@ -32,24 +32,24 @@ impl LayerValues {
 }
 
 /// Per-thread evaluators.
-struct Evals<'t> {
-    batch: BatchEval<'t>,
-    interval: IntervalEval<'t>,
+struct Evals {
+    batch: BatchEval,
+    interval: IntervalEval,
 }
 
 /// Samples layer `k` of `grid`, tile rows in parallel.
-pub fn rasterize(tape: &Tape, grid: &SliceGrid, k: usize) -> LayerValues {
-    rasterize_at(tape, grid, grid.z(k))
+pub fn rasterize(shape: &Shape, grid: &SliceGrid, k: usize) -> LayerValues {
+    rasterize_at(shape, grid, grid.z(k))
 }
 
 /// Samples the grid's image at height `z`.
-pub fn rasterize_at(tape: &Tape, grid: &SliceGrid, z: f64) -> LayerValues {
+pub fn rasterize_at(shape: &Shape, grid: &SliceGrid, z: f64) -> LayerValues {
     let (nx, ny) = (grid.nx, grid.ny);
     let mut values = vec![0.0f32; nx * ny];
     values.par_chunks_mut(TILE * nx).enumerate().for_each_init(
         || Evals {
-            batch: BatchEval::new(tape),
-            interval: IntervalEval::new(tape),
+            batch: BatchEval::new(shape.tape()),
+            interval: IntervalEval::new(shape.tape()),
         },
         |ev, (tr, rows)| {
             let j0 = tr * TILE;

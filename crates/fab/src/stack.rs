@@ -12,7 +12,7 @@ use crate::image::GreyImage;
 use crate::raster::{rasterize, LayerValues};
 use crate::simplify::simplify_closed;
 use crate::svg::layer_svg;
-use microfrep_core::Tape;
+use microfrep_core::Shape;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::fs;
@@ -34,9 +34,9 @@ pub enum Format {
 
 /// The simplified, oriented loops of a layer (see [`contours`]); loops that
 /// collapse below three vertices or to no area are dropped.
-pub fn layer_polygons(tape: &Tape, grid: &SliceGrid, layer: &LayerValues) -> Vec<Polygon> {
+pub fn layer_polygons(shape: &Shape, grid: &SliceGrid, layer: &LayerValues) -> Vec<Polygon> {
     let tol = SIMPLIFY_TOL_PIXELS * grid.pixel;
-    contours(tape, grid, layer)
+    contours(shape, grid, layer)
         .into_iter()
         .map(|p| simplify_closed(&p, tol))
         .filter(|p| p.len() >= 3 && signed_area(p) != 0.0)
@@ -47,7 +47,7 @@ pub fn layer_polygons(tape: &Tape, grid: &SliceGrid, layer: &LayerValues) -> Vec
 /// `manifest.json`, or one CLI file. `out` must not exist. `progress` is
 /// called once per finished layer.
 pub fn write_stack(
-    tape: &Tape,
+    shape: &Shape,
     grid: &SliceGrid,
     format: Format,
     out: &Path,
@@ -67,7 +67,7 @@ pub fn write_stack(
         name.to_string_lossy(),
         std::process::id()
     ));
-    let res = write_into(tape, grid, format, &tmp, progress);
+    let res = write_into(shape, grid, format, &tmp, progress);
     let res = res.and_then(|_| fs::rename(&tmp, out).map_err(io_at(out)));
     if res.is_err() {
         // Best effort: the error being reported matters more than this one.
@@ -77,7 +77,7 @@ pub fn write_stack(
 }
 
 fn write_into(
-    tape: &Tape,
+    shape: &Shape,
     grid: &SliceGrid,
     format: Format,
     tmp: &Path,
@@ -110,7 +110,7 @@ fn write_into(
             .into_par_iter()
             .map(|k| {
                 let path = tmp.join(file_name(k));
-                layer_payload(tape, grid, format, k, max, &path)
+                layer_payload(shape, grid, format, k, max, &path)
             })
             .collect();
         for (k, p) in (start..end).zip(payloads) {
@@ -146,28 +146,28 @@ fn write_into(
 
 /// The bytes one layer contributes: a PNG, an SVG or a CLI layer block.
 fn layer_payload(
-    tape: &Tape,
+    shape: &Shape,
     grid: &SliceGrid,
     format: Format,
     k: usize,
     max: [f64; 3],
     path: &Path,
 ) -> Result<Vec<u8>> {
-    let layer = rasterize(tape, grid, k);
+    let layer = rasterize(shape, grid, k);
     Ok(match format {
         Format::Png { aa: false } => GreyImage::binary(&layer).encode(path)?,
         Format::Png { aa: true } => {
-            let cov = coverage(tape, &layer, grid.pixel, [grid.min[0], grid.min[1]]);
+            let cov = coverage(shape, &layer, grid.pixel, [grid.min[0], grid.min[1]]);
             GreyImage::from_coverage(grid.nx, grid.ny, &cov).encode(path)?
         }
         Format::Svg => {
-            let polys = layer_polygons(tape, grid, &layer);
+            let polys = layer_polygons(shape, grid, &layer);
             let tol = SIMPLIFY_TOL_PIXELS * grid.pixel;
             let lo = [grid.min[0], grid.min[1]];
             layer_svg(&polys, layer.z, lo, [max[0], max[1]], tol).into_bytes()
         }
         Format::Cli => {
-            let polys = layer_polygons(tape, grid, &layer);
+            let polys = layer_polygons(shape, grid, &layer);
             let top = grid.min[2] + (k + 1) as f64 * grid.layer;
             cli_format::layer_block(top, &polys).into_bytes()
         }

@@ -4,7 +4,7 @@
 //! at a time.
 
 use crate::error::{io_at, FabError, Result};
-use microfrep_core::{eval_grid_par, Tape};
+use microfrep_core::{eval_grid_par, Shape};
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -79,10 +79,10 @@ impl VoxelGrid {
 /// Samples the model on `grid` and writes `out` (format from its
 /// extension); `.raw` gets a `.json` sidecar next to it. With `field` the
 /// values are f32, else occupancy bytes. Output appears only when complete.
-pub fn write_voxels(tape: &Tape, grid: &VoxelGrid, field: bool, out: &Path) -> Result<()> {
+pub fn write_voxels(shape: &Shape, grid: &VoxelGrid, field: bool, out: &Path) -> Result<()> {
     let format = VoxelFormat::from_path(out)?;
     let tmp = partial(out);
-    let res = write_into(tape, grid, field, format, &tmp);
+    let res = write_into(shape, grid, field, format, &tmp);
     let res = res.and_then(|_| fs::rename(&tmp, out).map_err(io_at(out)));
     if res.is_err() {
         let _ = fs::remove_file(&tmp);
@@ -105,7 +105,7 @@ fn partial(out: &Path) -> PathBuf {
 }
 
 fn write_into(
-    tape: &Tape,
+    shape: &Shape,
     g: &VoxelGrid,
     field: bool,
     format: VoxelFormat,
@@ -139,7 +139,12 @@ fn write_into(
     w.write_all(header.as_bytes()).map_err(io_at(tmp))?;
     let mut bytes = Vec::new();
     for k in 0..nz {
-        let vals = eval_grid_par(tape, [nx, ny, 1], [ox, oy, oz + k as f64 * s], [s, s, s]);
+        let vals = eval_grid_par(
+            shape.tape(),
+            [nx, ny, 1],
+            [ox, oy, oz + k as f64 * s],
+            [s, s, s],
+        );
         bytes.clear();
         if field {
             for v in vals {

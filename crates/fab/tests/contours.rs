@@ -2,7 +2,7 @@
 //! layer's image; orientation, closure and simplicity of every polygon; the
 //! SVG writer and reader agree.
 
-use microfrep_core::Tape;
+use microfrep_core::Shape;
 use microfrep_fab::contour::{signed_area, Polygon};
 use microfrep_fab::svg::{layer_svg, read_layer_svg};
 use microfrep_fab::{layer_polygons, rasterize_at, LayerValues, SliceGrid};
@@ -102,7 +102,7 @@ fn point_in(p: [f64; 2], poly: &Polygon) -> bool {
 
 #[test]
 fn shell_lattice_loops_match_flood_fill() {
-    let tape = Tape::new(&shell_lattice());
+    let tape = Shape::from(&shell_lattice());
     let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.1, 0.01).unwrap();
     for z in [0.05, 0.3, 0.7] {
         let layer = rasterize_at(&tape, &grid, z);
@@ -135,7 +135,7 @@ fn shell_lattice_loops_match_flood_fill() {
 
 #[test]
 fn sphere_contour_is_one_ccw_circle_within_tolerance() {
-    let tape = Tape::new(&microfrep_structures::examples::unit_sphere());
+    let tape = Shape::from(&microfrep_structures::examples::unit_sphere());
     let grid = SliceGrid::new([-1.1; 3], [1.1; 3], 0.1, 0.02).unwrap();
     let layer = rasterize_at(&tape, &grid, 0.6);
     let polys = layer_polygons(&tape, &grid, &layer);
@@ -154,7 +154,7 @@ fn sphere_contour_is_one_ccw_circle_within_tolerance() {
 
 #[test]
 fn svg_round_trip_keeps_loops() {
-    let tape = Tape::new(&shell_lattice());
+    let tape = Shape::from(&shell_lattice());
     let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.1, 0.02).unwrap();
     let layer = rasterize_at(&tape, &grid, 0.3);
     let polys = layer_polygons(&tape, &grid, &layer);

@@ -1,7 +1,7 @@
 //! Files on disk: PNG stacks with manifest, CLI round trip, voxel grids,
 //! and refusals that leave nothing behind.
 
-use microfrep_core::Tape;
+use microfrep_core::Shape;
 use microfrep_fab::cli_format::read_cli;
 use microfrep_fab::contour::signed_area;
 use microfrep_fab::image::{decode_png, GreyImage};
@@ -21,7 +21,7 @@ fn scratch(name: &str) -> PathBuf {
 
 #[test]
 fn png_stack_matches_layers_and_manifest() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let grid = SliceGrid::new([-1.0; 3], [1.0; 3], 0.25, 0.02).unwrap();
     let dir = scratch("png");
     let out = dir.join("stack");
@@ -51,7 +51,7 @@ fn png_stack_matches_layers_and_manifest() {
 
 #[test]
 fn aa_png_is_8_bit_with_grey_edges() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let grid = SliceGrid::new([-1.0, -1.0, -0.1], [1.0, 1.0, 0.1], 0.2, 0.05).unwrap();
     let out = scratch("aa").join("stack");
     write_stack(&tape, &grid, Format::Png { aa: true }, &out, &|| {}).unwrap();
@@ -64,7 +64,7 @@ fn aa_png_is_8_bit_with_grey_edges() {
 
 #[test]
 fn cli_file_round_trips() {
-    let tape = Tape::new(&shell_lattice());
+    let tape = Shape::from(&shell_lattice());
     let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.3, 0.03).unwrap();
     let out = scratch("cli").join("part.cli");
     write_stack(&tape, &grid, Format::Cli, &out, &|| {}).unwrap();
@@ -110,7 +110,7 @@ fn cli_reader_rejects_broken_files_with_line() {
 
 #[test]
 fn voxels_nrrd_holds_the_sphere_volume() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let grid = VoxelGrid::new([-1.0; 3], [1.0; 3], 0.04).unwrap();
     assert_eq!(grid.dims, [50, 50, 50]);
     let out = scratch("vox").join("ball.nrrd");
@@ -129,7 +129,7 @@ fn voxels_nrrd_holds_the_sphere_volume() {
 
 #[test]
 fn voxels_raw_field_with_sidecar_and_vtk() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let grid = VoxelGrid::new([-1.0; 3], [1.0; 3], 0.5).unwrap();
     let dir = scratch("raw");
     let raw = dir.join("f.raw");

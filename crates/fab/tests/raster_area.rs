@@ -1,19 +1,19 @@
 //! Layer areas against closed forms: sphere discs (binary and anti-aliased)
 //! and the alpha = 1 rod lattice.
 
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 use microfrep_fab::coverage::coverage;
 use microfrep_fab::{rasterize_at, SliceGrid};
 use microfrep_structures::examples::unit_sphere;
 use microfrep_structures::lattice::{rod_lattice, Slabs};
 use std::f64::consts::PI;
 
-fn inside_count(tape: &Tape, grid: &SliceGrid, z: f64) -> usize {
+fn inside_count(tape: &Shape, grid: &SliceGrid, z: f64) -> usize {
     let l = rasterize_at(tape, grid, z);
     l.values.iter().filter(|&&v| v >= 0.0).count()
 }
 
-fn covered_area(tape: &Tape, grid: &SliceGrid, z: f64) -> f64 {
+fn covered_area(tape: &Shape, grid: &SliceGrid, z: f64) -> f64 {
     let l = rasterize_at(tape, grid, z);
     let cov = coverage(tape, &l, grid.pixel, [grid.min[0], grid.min[1]]);
     cov.iter().map(|&c| c as f64 / 255.0).sum::<f64>() * grid.pixel * grid.pixel
@@ -21,7 +21,7 @@ fn covered_area(tape: &Tape, grid: &SliceGrid, z: f64) -> f64 {
 
 #[test]
 fn sphere_layers_match_disc_area() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let p = 0.01;
     let grid = SliceGrid::new([-1.1; 3], [1.1; 3], 0.05, p).unwrap();
     for z in [0.0, 0.3, -0.6, 0.9] {
@@ -43,7 +43,7 @@ fn sphere_layers_match_disc_area() {
 #[test]
 fn anti_aliasing_beats_binary_on_a_small_disc() {
     // A coarse grid, where pixel counting is visibly off but coverage is not.
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let grid = SliceGrid::new([-1.0; 3], [1.0; 3], 0.1, 0.1).unwrap();
     let z = 0.5;
     let exact = PI * 0.75;
@@ -61,7 +61,7 @@ fn rod_lattice_area_fraction_matches_square_rod_grid() {
     let l = 0.3;
     let p = Expr::xyz();
     let lattice = rod_lattice(&p, &Slabs::uniform(2.0 * PI, l), 1.0);
-    let tape = Tape::new(&lattice);
+    let tape = Shape::from(&lattice);
     let w = (PI - 2.0 * f64::asin(l)) / (2.0 * PI);
     let grid = SliceGrid::new([0.0; 3], [4.0; 3], 0.1, 0.01).unwrap();
     let total = 16.0;

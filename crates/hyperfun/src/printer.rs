@@ -11,7 +11,7 @@
 //! HyperFun still differs where the core gives NaN (`sqrt`, `log` of a
 //! negative) or divides by a small non-constant: it reports an error there.
 
-use microfrep_core::{BinaryOp, Expr, ExprNode, UnaryOp};
+use microfrep_core::{BinaryOp, Expr, ExprNode, SetOp, UnaryOp};
 use std::collections::HashMap;
 use std::fmt::Write;
 
@@ -215,6 +215,21 @@ impl Printer {
                     .push(format!("if {} then {t} = {ta}; endif;", Self::nonzero(&c)));
                 (t, 0)
             }
+            ExprNode::Set { op, a, b, alpha } if alpha.as_const() == Some(0.0) => {
+                let sym = if *op == SetOp::Union { "|" } else { "&" };
+                self.bin(a, sym, b)?
+            }
+            ExprNode::Blend { op, args } if args[2].as_const() == Some(0.0) => {
+                let f = if *op == SetOp::Union {
+                    "hfBlendUni"
+                } else {
+                    "hfBlendInt"
+                };
+                let [a, b, _, a0, a1, a2] = &**args;
+                self.call(f, &[a, b, a0, a1, a2])?
+            }
+            // Other parameters have no HyperFun operator: the formula.
+            ExprNode::Set { .. } | ExprNode::Blend { .. } => self.emit(&e.expand())?,
             ExprNode::Field { field, .. } => {
                 return Err(format!(
                     "data-driven field '{}' has no HyperFun form",

@@ -3,6 +3,7 @@
 //! `STREAM=1` streams through a counting sink instead of collecting the
 //! mesh; `BRICK=K` sets the brick size; `CUBES=1` uses marching cubes.
 
+use microfrep_core::Shape;
 use microfrep_mesh::{MeshOptions, Plan};
 use std::time::Instant;
 
@@ -27,7 +28,7 @@ fn main() {
         if std::env::var("CUBES").is_ok() {
             opts.cells = microfrep_mesh::CellMethod::Cubes;
         }
-        let plan = Plan::new(&expr, &opts).expect("plan");
+        let plan = Plan::new(&Shape::from(&expr), &opts).expect("plan");
         let t_plan = t.elapsed().as_secs_f64();
         // STREAM=1: through a counting sink, never holding the mesh.
         let (tris, verts) = if std::env::var("STREAM").is_ok() {

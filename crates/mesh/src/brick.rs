@@ -5,8 +5,7 @@ use crate::classify::{proven_sign, unproven_cells, BrickClass};
 use crate::grid::Grid;
 use crate::refine::{refine_edges, Edge};
 use crate::tets::CellTable;
-use microfrep_core::csg::{Csg, CsgEval};
-use microfrep_core::{BatchEval, Tape, BLOCK};
+use microfrep_core::{BatchEval, IntervalEval, Tape, BLOCK};
 
 /// The part of the mesh made by one brick. Vertices on grid edges that start
 /// in this brick's half-open node range are owned here; the others are
@@ -26,9 +25,9 @@ pub struct BrickMesh {
 }
 
 /// Per-thread buffers, reused from brick to brick.
-pub struct Scratch<'t> {
-    batch: BatchEval<'t>,
-    interval: CsgEval<'t>,
+pub struct Scratch {
+    batch: BatchEval,
+    interval: IntervalEval,
     vals: Vec<f32>,
     inside: Vec<u8>,
     /// Local edge -> local vertex, u32::MAX when unset, for the edges that
@@ -43,12 +42,12 @@ pub struct Scratch<'t> {
     tris: Vec<[u32; 3]>,
 }
 
-impl<'t> Scratch<'t> {
-    pub fn new(tape: &'t Tape, csg: &'t Csg, brick: usize) -> Self {
+impl Scratch {
+    pub fn new(tape: &Tape, brick: usize) -> Self {
         let nodes = (brick + 1).pow(3);
         Scratch {
             batch: BatchEval::new(tape),
-            interval: CsgEval::new(csg),
+            interval: IntervalEval::new(tape),
             edges: Vec::new(),
             tris: Vec::new(),
             vals: vec![0.0; nodes],

@@ -2,8 +2,7 @@
 //! provably negative (empty) or non-negative (full) need no sampling.
 
 use crate::grid::Grid;
-use microfrep_core::csg::{Csg, CsgEval};
-use microfrep_core::Interval;
+use microfrep_core::{Interval, IntervalEval, Tape};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -14,13 +13,13 @@ pub enum BrickClass {
     Surface,
 }
 
-/// Class of every brick, in brick index order, from interval bounds taken
-/// through the model's set operations.
-pub fn classify(csg: &Csg, grid: &Grid) -> Vec<BrickClass> {
+/// Class of every brick, in brick index order, from interval bounds of the
+/// tape's first output (tight through set operations, which are nodes).
+pub fn classify(tape: &Tape, grid: &Grid) -> Vec<BrickClass> {
     (0..grid.brick_count())
         .into_par_iter()
         .map_init(
-            || CsgEval::new(csg),
+            || IntervalEval::new(tape),
             |ev, k| {
                 let (lo, n) = grid.brick_nodes(grid.brick_coords(k));
                 let a = grid.node_pos(lo);
@@ -78,7 +77,7 @@ const THIN_BUDGET: usize = 2048;
 /// evaluation budget runs out, the cells of the boxes left count as
 /// unproven.
 pub fn unproven_cells(
-    ev: &mut CsgEval,
+    ev: &mut IntervalEval,
     grid: &Grid,
     lo: [usize; 3],
     n: [usize; 3],

@@ -1,8 +1,8 @@
 //! Watertight, 2-manifold triangle meshes of FRep models (inside is f >= 0).
 //!
 //! A uniform grid is cut into bricks; bricks are classified with interval
-//! arithmetic taken through the model's set operations ([`csg`]; empty and
-//! full ones skipped), surface bricks are sampled
+//! arithmetic (tight through set operations, which are nodes of the core
+//! graph; empty and full ones skipped), surface bricks are sampled
 //! densely with the f32 batch evaluator and meshed by marching tetrahedra
 //! or marching cubes ([`tets`] and [`cubes`] argue why the result is closed
 //! and manifold; [`CellMethod`]), vertices are
@@ -15,21 +15,19 @@
 //! the model and the options.
 //!
 //! ```
-//! use microfrep_core::{prims, Expr};
+//! use microfrep_core::{prims, Expr, Shape};
 //! use microfrep_mesh::{check::check, MeshOptions, Plan};
-//! let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
+//! let ball = Shape::new(prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0));
 //! let opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], 16);
 //! let mesh = Plan::new(&ball, &opts).unwrap().run(&|_| {}).unwrap();
 //! let r = check(&mesh);
 //! assert!(r.is_closed_manifold() && r.euler == 2);
 //! ```
 
-pub mod bounds;
 mod brick;
 pub mod check;
 mod classify;
 pub mod correct;
-pub use microfrep_core::csg;
 pub mod cubes;
 mod grid;
 pub mod memory;
@@ -41,7 +39,7 @@ pub mod write;
 
 use classify::{classify, BrickClass};
 pub use grid::Grid;
-use microfrep_core::{Expr, GradBatchEval, Tape};
+use microfrep_core::{Expr, GradBatchEval, Shape, Tape};
 use rayon::prelude::*;
 
 #[derive(Debug, thiserror::Error)]
@@ -121,9 +119,8 @@ impl MeshOptions {
 /// A meshing job after interval classification, before the dense work:
 /// enough to predict its memory (see [`memory`]).
 pub struct Plan {
+    /// The model clipped to the box (output 0), with its other outputs.
     pub tape: Tape,
-    /// The same model's set-operation tree, for tight interval signs.
-    csg: csg::Csg,
     pub grid: Grid,
     classes: Vec<BrickClass>,
     cells: CellMethod,
@@ -132,7 +129,7 @@ pub struct Plan {
 }
 
 impl Plan {
-    pub fn new(expr: &Expr, opts: &MeshOptions) -> Result<Plan, MeshError> {
+    pub fn new(shape: &Shape, opts: &MeshOptions) -> Result<Plan, MeshError> {
         if !(2..=256).contains(&opts.brick) {
             return Err(MeshError::Input(format!(
                 "brick size {} must be between 2 and 256",
@@ -140,13 +137,11 @@ impl Plan {
             )));
         }
         let grid = Grid::new(opts.bounds, opts.resolution, opts.brick)?;
-        let clipped = clip(expr, opts.bounds);
-        let tape = Tape::new(&clipped);
-        let csg = csg::Csg::new(&clipped);
-        let classes = classify(&csg, &grid);
+        let clipped = shape.map(|e| clip(e, opts.bounds));
+        let tape = clipped.tape().clone();
+        let classes = classify(&tape, &grid);
         Ok(Plan {
             tape,
-            csg,
             grid,
             classes,
             cells: opts.cells,

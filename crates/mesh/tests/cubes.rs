@@ -1,6 +1,7 @@
 //! The marching-cubes cell method: the same guarantees as the default, and
 //! convergence on models with known answers.
 
+use microfrep_core::Shape;
 use microfrep_core::{prims, Expr};
 use microfrep_mesh::check::{check, CheckReport};
 use microfrep_mesh::{CellMethod, MeshOptions, Plan};
@@ -17,7 +18,7 @@ fn opts(bounds: [[f64; 3]; 2], n: usize) -> MeshOptions {
 }
 
 fn mesh(e: &Expr, bounds: [[f64; 3]; 2], n: usize) -> CheckReport {
-    let m = Plan::new(e, &opts(bounds, n))
+    let m = Plan::new(&Shape::from(e), &opts(bounds, n))
         .unwrap()
         .run(&|_| {})
         .unwrap();
@@ -91,7 +92,10 @@ fn output_is_deterministic_and_independent_of_brick_size() {
     let run = |brick: usize| {
         let mut o = opts([[-1.0; 3], [1.0; 3]], 40);
         o.brick = brick;
-        Plan::new(&toriball(), &o).unwrap().run(&|_| {}).unwrap()
+        Plan::new(&Shape::from(&toriball()), &o)
+            .unwrap()
+            .run(&|_| {})
+            .unwrap()
     };
     let a = run(8);
     assert_eq!(a, run(8));
@@ -117,7 +121,11 @@ fn ambiguous_cells_everywhere_still_give_a_closed_manifold() {
 #[test]
 fn predicted_size_is_close_to_the_real_one() {
     let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.5, 0.0, -0.25]), 1.0);
-    let plan = Plan::new(&ball, &opts([[-0.6, -1.1, -1.35], [1.6, 1.1, 0.85]], 96)).unwrap();
+    let plan = Plan::new(
+        &Shape::from(&ball),
+        &opts([[-0.6, -1.1, -1.35], [1.6, 1.1, 0.85]], 96),
+    )
+    .unwrap();
     let est = microfrep_mesh::memory::estimate(&plan);
     let m = plan.run(&|_| {}).unwrap();
     let ratio = est.triangles / m.triangles.len() as f64;
@@ -135,7 +143,12 @@ fn output_does_not_depend_on_the_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| Plan::new(&toriball(), &o).unwrap().run(&|_| {}).unwrap())
+            .install(|| {
+                Plan::new(&Shape::from(&toriball()), &o)
+                    .unwrap()
+                    .run(&|_| {})
+                    .unwrap()
+            })
     };
     assert_eq!(run(1), run(3));
 }

@@ -2,6 +2,7 @@
 //! with marching tetrahedra (`tests/cubes.rs` holds the same for the
 //! default, marching cubes).
 
+use microfrep_core::Shape;
 use microfrep_core::{prims, Expr};
 use microfrep_mesh::check::{check, CheckReport};
 use microfrep_mesh::{CellMethod, Mesh, MeshOptions, Plan};
@@ -14,7 +15,10 @@ use std::f64::consts::PI;
 fn mesh(e: &Expr, bounds: [[f64; 3]; 2], n: usize) -> (Mesh, CheckReport) {
     let mut o = MeshOptions::new(bounds, n);
     o.cells = CellMethod::Tetrahedra;
-    let m = Plan::new(e, &o).unwrap().run(&|_| {}).unwrap();
+    let m = Plan::new(&Shape::from(e), &o)
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
     let r = check(&m);
     assert!(r.is_closed_manifold(), "n = {n}: {r:?}");
     (m, r)
@@ -106,7 +110,10 @@ fn output_is_deterministic_and_independent_of_brick_size() {
     let run = |brick: usize| {
         let mut o = MeshOptions::new(b, 40);
         o.brick = brick;
-        Plan::new(&toriball(), &o).unwrap().run(&|_| {}).unwrap()
+        Plan::new(&Shape::from(&toriball()), &o)
+            .unwrap()
+            .run(&|_| {})
+            .unwrap()
     };
     let a = run(8);
     assert_eq!(a, run(8));

@@ -1,7 +1,7 @@
 //! Bounds from interval analysis, memory prediction and input errors.
 
-use microfrep_core::{prims, Expr, Tape};
-use microfrep_mesh::bounds::{model_bounds, model_bounds_of};
+use microfrep_core::Shape;
+use microfrep_core::{prims, Expr};
 use microfrep_mesh::{memory, MeshError, MeshOptions, Plan};
 use microfrep_structures::examples::{shell_lattice, toriball};
 
@@ -11,7 +11,7 @@ fn ball() -> Expr {
 
 #[test]
 fn bounds_of_a_ball_enclose_it_tightly() {
-    let b = model_bounds(&Tape::new(&ball())).unwrap();
+    let b = Shape::from(&ball()).bounds().unwrap().corners();
     let c = [0.5, 0.0, -0.25];
     for a in 0..3 {
         assert!(b[0][a] <= c[a] - 1.0 && b[0][a] > c[a] - 1.1, "{b:?}");
@@ -24,7 +24,7 @@ fn lattices_cut_by_a_block_or_a_shell_get_that_box() {
     // Plain interval arithmetic on the whole R-function gives boxes of about
     // [-1.6, 1.6] x [-1.6, 1.6] x [-1.9, 1.9] and [-7, 7]^3 here.
     for (name, e) in [("toriball", toriball()), ("shell_lattice", shell_lattice())] {
-        let b = model_bounds_of(&e).unwrap();
+        let b = Shape::from(&e).bounds().unwrap().corners();
         for a in 0..3 {
             assert!(b[0][a] <= -1.0 && b[0][a] > -1.001, "{name}: {b:?}");
             assert!(b[1][a] >= 1.0 && b[1][a] < 1.001, "{name}: {b:?}");
@@ -36,11 +36,11 @@ fn lattices_cut_by_a_block_or_a_shell_get_that_box() {
 fn a_slab_bounds_only_its_own_axis() {
     let p = Expr::xyz();
     let slab = (&p[0] - 0.5) * (2.0 - &p[0]);
-    let e = model_bounds_of(&slab).unwrap_err();
+    let e = Shape::from(&slab).bounds().unwrap_err();
     assert!(e.to_string().contains("--bounds"), "{e}");
     let ball = prims::sphere(&p, &prims::v3([0.0; 3]), 1.0);
     let cut = microfrep_core::frep::intersection(&ball, &slab, 0.0);
-    let b = model_bounds_of(&cut).unwrap();
+    let b = Shape::from(&cut).bounds().unwrap().corners();
     assert!(
         b[0][0] <= 0.5 && b[0][0] > 0.49 && b[1][0] >= 1.0 && b[1][0] < 1.01,
         "{b:?}"
@@ -53,21 +53,21 @@ fn a_slab_bounds_only_its_own_axis() {
 #[test]
 fn unbounded_models_ask_for_bounds() {
     let half = prims::half_space(&Expr::xyz(), [0.0; 3], [0.0, 0.0, 1.0]);
-    let e = model_bounds(&Tape::new(&half)).unwrap_err();
+    let e = Shape::from(&half).bounds().unwrap_err();
     assert!(e.to_string().contains("--bounds"), "{e}");
-    let e = model_bounds_of(&half).unwrap_err();
+    let e = Shape::from(&half.min(&half)).bounds().unwrap_err();
     assert!(e.to_string().contains("--bounds"), "{e}");
     // A lattice alone is periodic over all space.
     let slabs = microfrep_structures::lattice::Slabs::uniform(6.0, 0.3);
     let lattice = microfrep_structures::lattice::rod_lattice(&Expr::xyz(), &slabs, 1.0);
-    let e = model_bounds_of(&lattice.min(&half)).unwrap_err();
+    let e = Shape::from(&lattice.min(&half)).bounds().unwrap_err();
     assert!(e.to_string().contains("--bounds"), "{e}");
 }
 
 #[test]
 fn predicted_size_is_close_to_the_real_one() {
     let opts = MeshOptions::new([[-0.6, -1.1, -1.35], [1.6, 1.1, 0.85]], 96);
-    let plan = Plan::new(&ball(), &opts).unwrap();
+    let plan = Plan::new(&Shape::from(&ball()), &opts).unwrap();
     let est = memory::estimate(&plan);
     let m = plan.run(&|_| {}).unwrap();
     let ratio = est.triangles / m.triangles.len() as f64;
@@ -79,7 +79,7 @@ fn predicted_size_is_close_to_the_real_one() {
 fn bad_options_are_errors() {
     let bad = |bounds: [[f64; 3]; 2], n: usize| {
         matches!(
-            Plan::new(&ball(), &MeshOptions::new(bounds, n)),
+            Plan::new(&Shape::from(&ball()), &MeshOptions::new(bounds, n)),
             Err(MeshError::Input(_))
         )
     };
@@ -92,7 +92,10 @@ fn bad_options_are_errors() {
 #[test]
 fn a_model_missing_the_box_gives_an_empty_mesh() {
     let opts = MeshOptions::new([[3.0; 3], [4.0; 3]], 16);
-    let m = Plan::new(&ball(), &opts).unwrap().run(&|_| {}).unwrap();
+    let m = Plan::new(&Shape::from(&ball()), &opts)
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
     assert!(m.triangles.is_empty() && m.vertices.is_empty());
 }
 
@@ -102,12 +105,16 @@ fn features_thinner_than_a_cell_vanish_and_are_reported() {
     let z = Expr::z();
     let plate = 0.001 - (&z - 0.05).abs();
     let opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], 20);
-    let plan = Plan::new(&plate, &opts).unwrap();
+    let plan = Plan::new(&Shape::from(&plate), &opts).unwrap();
     let m = plan.run(&|_| {}).unwrap();
     assert!(m.triangles.is_empty());
     assert!(plan.thin_cells() > 0);
     // A ball resolved by the grid: nothing to report.
-    let plan = Plan::new(&ball(), &MeshOptions::new([[-1.0; 3], [2.0; 3]], 32)).unwrap();
+    let plan = Plan::new(
+        &Shape::from(&ball()),
+        &MeshOptions::new([[-1.0; 3], [2.0; 3]], 32),
+    )
+    .unwrap();
     assert!(!plan.run(&|_| {}).unwrap().triangles.is_empty());
     assert_eq!(plan.thin_cells(), 0);
 }

@@ -2,6 +2,7 @@
 //! pipeline's grouping of slabs (which follows the thread count) does not
 //! change the output.
 
+use microfrep_core::Shape;
 use microfrep_mesh::check::check;
 use microfrep_mesh::write::{stream_mesh, stream_temp_paths, write_mesh, Format};
 use microfrep_mesh::{Mesh, MeshOptions, Plan};
@@ -19,7 +20,7 @@ fn dir(name: &str) -> PathBuf {
 fn plan() -> Plan {
     let mut o = MeshOptions::new([[-1.0; 3], [1.0; 3]], 40);
     o.brick = 8;
-    Plan::new(&toriball(), &o).unwrap()
+    Plan::new(&Shape::from(&toriball()), &o).unwrap()
 }
 
 fn with_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {

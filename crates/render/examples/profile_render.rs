@@ -1,8 +1,8 @@
 //! Times a ray-cast render of a built-in example: `cargo run --release -p
 //! microfrep-render --example profile_render -- NAME SIZE [THREADS]`.
 
-use microfrep_core::Tape;
-use microfrep_render::{ray_cast_with, Camera, Csg, View};
+use microfrep_core::Shape;
+use microfrep_render::{ray_cast, Camera, View};
 use std::time::Instant;
 
 fn main() {
@@ -12,8 +12,7 @@ fn main() {
     let threads: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
     let ex = microfrep_structures::examples::by_name(name).expect("example name");
     let expr = (ex.build)();
-    let tape = Tape::new(&expr);
-    let csg = (std::env::var("PLAIN").is_err()).then(|| Csg::new(&expr));
+    let shape = Shape::new(expr);
     let (lo, hi) = ex.bounds;
     let cam = Camera::fit(View::Iso, lo, hi, n, n);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -21,7 +20,7 @@ fn main() {
         .build()
         .expect("pool");
     let t = Instant::now();
-    let img = pool.install(|| ray_cast_with(&tape, csg.as_ref(), &cam, lo, hi));
+    let img = pool.install(|| ray_cast(&shape, &cam, lo, hi));
     let hit = img.data.chunks(3).filter(|c| c != &[250, 250, 250]).count();
     println!(
         "{name} {n}: {:.3} s, {hit} pixels hit",

@@ -2,7 +2,6 @@
 //! interval-arithmetic root finding, cut-away views and section images.
 
 pub mod camera;
-pub use microfrep_core::csg;
 mod error;
 pub mod image;
 pub mod section;
@@ -10,18 +9,17 @@ pub mod shade;
 pub mod trace;
 
 pub use camera::{Camera, View};
-pub use csg::Csg;
 pub use error::{RenderError, Result};
 pub use image::RgbImage;
 pub use section::{section, Plane};
-pub use shade::{ray_cast, ray_cast_with};
+pub use shade::ray_cast;
 
-use microfrep_core::Expr;
+use microfrep_core::{Expr, Shape};
 
 /// The model with the octant of the box `min`..`max` nearest the viewer
 /// removed (intersection with the complement of that octant), so the inside
 /// shows. Exact min/max, so the cut faces are planar.
-pub fn cutaway(model: &Expr, view: View, min: [f64; 3], max: [f64; 3]) -> Expr {
+pub fn cutaway(model: &Shape, view: View, min: [f64; 3], max: [f64; 3]) -> Shape {
     let cam = Camera::fit(view, min, max, 1, 1);
     let p = Expr::xyz();
     let keep: Vec<Expr> = (0..3)
@@ -35,5 +33,5 @@ pub fn cutaway(model: &Expr, view: View, min: [f64; 3], max: [f64; 3]) -> Expr {
             }
         })
         .collect();
-    model.min(keep[0].max(&keep[1]).max(&keep[2]))
+    model.map(|m| m.min(keep[0].max(&keep[1]).max(&keep[2])))
 }

@@ -4,7 +4,7 @@
 
 use crate::error::{RenderError, Result};
 use crate::image::RgbImage;
-use microfrep_core::{BatchEval, Tape};
+use microfrep_core::{BatchEval, Shape};
 use rayon::prelude::*;
 
 /// An axis-aligned plane `axis = value` (axis 0, 1, 2 for x, y, z).
@@ -45,7 +45,7 @@ fn screen_axes(axis: usize) -> (usize, usize) {
 
 /// The section of the box `min`..`max` by `plane`, fitted into the image.
 pub fn section(
-    tape: &Tape,
+    shape: &Shape,
     plane: Plane,
     min: [f64; 3],
     max: [f64; 3],
@@ -58,7 +58,7 @@ pub fn section(
     let cv = 0.5 * (min[ua] + max[ua]);
     let mut vals = vec![0f32; w * h];
     vals.par_chunks_mut(w).enumerate().for_each_init(
-        || BatchEval::new(tape),
+        || BatchEval::new(shape.tape()),
         |ev, (y, row)| {
             let mut p = [vec![0f32; w], vec![0f32; w], vec![0f32; w]];
             let v = cv + (0.5 * h as f64 - y as f64 - 0.5) * scale;

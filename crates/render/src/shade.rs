@@ -3,8 +3,7 @@
 use crate::camera::{dot, normalize, Camera};
 use crate::image::RgbImage;
 use crate::trace::Tracer;
-use microfrep_core::csg::Csg;
-use microfrep_core::{GradEval, Tape};
+use microfrep_core::{GradEval, Shape};
 use rayon::prelude::*;
 
 /// Side of the screen tiles traced as one task.
@@ -14,21 +13,10 @@ const SURFACE: [f64; 3] = [0.85, 0.62, 0.35];
 const AMBIENT: f64 = 0.25;
 
 /// Ray casts the model inside the box `min`..`max` with `cam`; tiles in
-/// parallel, same bytes every run.
-pub fn ray_cast(tape: &Tape, cam: &Camera, min: [f64; 3], max: [f64; 3]) -> RgbImage {
-    ray_cast_with(tape, None, cam, min, max)
-}
-
-/// As [`ray_cast`]; with `csg` (built from the same model) the interval
-/// search goes through the model's set operations, much tighter on CSG
-/// trees of lattices and shells.
-pub fn ray_cast_with(
-    tape: &Tape,
-    csg: Option<&Csg>,
-    cam: &Camera,
-    min: [f64; 3],
-    max: [f64; 3],
-) -> RgbImage {
+/// parallel, same bytes every run. The interval search is tight through
+/// the model's set operations, which are nodes of its tape.
+pub fn ray_cast(shape: &Shape, cam: &Camera, min: [f64; 3], max: [f64; 3]) -> RgbImage {
+    let tape = shape.tape();
     let (w, h) = (cam.width, cam.height);
     // Light from over the viewer's left shoulder.
     let light = normalize([0, 1, 2].map(|a| -cam.dir[a] + 0.6 * cam.up[a] - 0.4 * cam.right[a]));
@@ -39,13 +27,7 @@ pub fn ray_cast_with(
     let shaded: Vec<Vec<[u8; 3]>> = tiles
         .par_iter()
         .map_init(
-            || {
-                let tr = match csg {
-                    Some(c) => Tracer::with_csg(tape, c, cam, min, max),
-                    None => Tracer::new(tape, cam, min, max),
-                };
-                (tr, GradEval::new(tape))
-            },
+            || (Tracer::new(tape, cam, min, max), GradEval::new(tape)),
             |(tr, ge), &(x0, y0)| {
                 let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
                 tr.start_tile();

@@ -16,24 +16,7 @@
 //! them.
 
 use crate::camera::{Camera, V3};
-use microfrep_core::csg::{Csg, CsgEval};
 use microfrep_core::{BatchEval, Interval, IntervalEval, PointEval, Tape, BLOCK};
-
-/// Interval bounds of the model on boxes: plain, or through its set
-/// operations (see [`crate::csg`]); only their signs are used.
-enum Bounds<'t> {
-    Plain(IntervalEval<'t>),
-    Csg(CsgEval<'t>),
-}
-
-impl Bounds<'_> {
-    fn eval(&mut self, x: Interval, y: Interval, z: Interval) -> Interval {
-        match self {
-            Bounds::Plain(e) => e.eval(x, y, z),
-            Bounds::Csg(e) => e.eval(x, y, z),
-        }
-    }
-}
 
 /// Bisection steps after a hit: depth error below half a pixel / 2^14.
 const BISECT: usize = 14;
@@ -47,33 +30,26 @@ pub struct Tracer<'t> {
     /// The box rays are clipped to.
     lo: V3,
     hi: V3,
-    iv: Bounds<'t>,
-    pe: PointEval<'t>,
-    batch: BatchEval<'t>,
+    iv: IntervalEval,
+    pe: PointEval,
+    batch: BatchEval,
     /// Whether at least a quarter of the last ray's interval evaluations
     /// decided their segment.
     bounds_help: bool,
 }
 
 impl<'t> Tracer<'t> {
-    pub fn new(tape: &'t Tape, cam: &'t Camera, lo: V3, hi: V3) -> Tracer<'t> {
+    /// A tracer of `tape` (output 0) seen by `cam` inside the box `lo`..`hi`.
+    pub fn new(tape: &Tape, cam: &'t Camera, lo: V3, hi: V3) -> Tracer<'t> {
         Tracer {
             cam,
             lo,
             hi,
-            iv: Bounds::Plain(IntervalEval::new(tape)),
+            iv: IntervalEval::new(tape),
             pe: PointEval::new(tape),
             batch: BatchEval::new(tape),
             bounds_help: true,
         }
-    }
-
-    /// As [`Self::new`], with interval bounds taken through the model's set
-    /// operations (`csg` must be built from the same model as `tape`).
-    pub fn with_csg(tape: &'t Tape, csg: &'t Csg, cam: &'t Camera, lo: V3, hi: V3) -> Tracer<'t> {
-        let mut t = Tracer::new(tape, cam, lo, hi);
-        t.iv = Bounds::Csg(CsgEval::new(csg));
-        t
     }
 
     /// The depth range where the ray through `(u, v)` is inside the box.

@@ -1,10 +1,8 @@
 //! Ray casting, cut-aways and sections of the unit sphere against closed forms.
 
-use microfrep_core::Tape;
-use microfrep_core::{Interval, PointEval};
-use microfrep_render::csg::CsgEval;
+use microfrep_core::Shape;
 use microfrep_render::trace::Tracer;
-use microfrep_render::{cutaway, ray_cast, ray_cast_with, section, Camera, Csg, Plane, View};
+use microfrep_render::{cutaway, ray_cast, section, Camera, Plane, View};
 use microfrep_structures::examples::{shell_lattice, unit_sphere};
 use std::f64::consts::PI;
 
@@ -14,7 +12,7 @@ const HI: [f64; 3] = [1.0; 3];
 
 #[test]
 fn sphere_silhouette_matches_projected_disc() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     for view in [View::Front, View::Top, View::Iso] {
         let cam = Camera::fit(view, LO, HI, 160, 120);
         let img = ray_cast(&tape, &cam, LO, HI);
@@ -33,96 +31,36 @@ fn sphere_silhouette_matches_projected_disc() {
 }
 
 #[test]
-fn csg_bounds_are_sound_for_the_sign_and_tighter() {
-    // Boxes of several sizes over the shell-with-lattice and its cut-away:
-    // where the set-operation bounds say empty (solid), every sample is
-    // outside (inside); and they decide at least as often as plain ones.
-    for e in [
-        shell_lattice(),
-        cutaway(&shell_lattice(), View::Iso, LO, HI),
-    ] {
-        let tape = Tape::new(&e);
-        let csg = Csg::new(&e);
-        assert!(csg.leaves() > 3);
-        let mut ce = CsgEval::new(&csg);
-        let mut pe = PointEval::new(&tape);
-        let mut ie = microfrep_core::IntervalEval::new(&tape);
-        let (mut decided, mut plain_decided) = (0, 0);
-        let mut seed = 12345u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for k in 0..3000 {
-            let size = [0.4, 0.1, 0.02][k % 3];
-            let c: [f64; 3] = std::array::from_fn(|_| -1.1 + 2.2 * rnd());
-            let iv = |a: usize| Interval::new(c[a] - size, c[a] + size);
-            let r = ce.eval(iv(0), iv(1), iv(2));
-            let empty = r.hi < 0.0;
-            let solid = r.lo >= 0.0 && !r.may_be_nan();
-            let p = ie.eval(iv(0), iv(1), iv(2));
-            plain_decided += (p.hi < 0.0 || p.lo >= 0.0) as usize;
-            decided += (empty || solid) as usize;
-            if empty || solid {
-                for _ in 0..20 {
-                    let q: [f64; 3] = std::array::from_fn(|a| c[a] - size + 2.0 * size * rnd());
-                    let inside = pe.eval(q) >= 0.0;
-                    if empty {
-                        assert!(!inside, "empty box {c:?} +- {size}");
-                    }
-                    if solid {
-                        assert!(inside, "solid box {c:?} +- {size}");
-                    }
-                }
-            }
-        }
-        assert!(
-            decided >= plain_decided && decided > 1000,
-            "{decided} vs {plain_decided}"
-        );
-    }
-}
-
-#[test]
-fn csg_search_finds_the_same_sphere_and_rod() {
-    let tape = Tape::new(&unit_sphere());
-    let csg = Csg::new(&unit_sphere());
-    let cam = Camera::fit(View::Iso, LO, HI, 120, 90);
-    let a = ray_cast(&tape, &cam, LO, HI);
-    let b = ray_cast_with(&tape, Some(&csg), &cam, LO, HI);
-    assert_eq!(a, b);
-    // A thin rod cut by a block: the set-operation search still finds it.
+fn set_node_search_finds_a_thin_rod_cut_by_a_block() {
+    // A thin rod cut by a block: the interval search through the
+    // intersection node still finds it, and misses the pixel next to it.
     let cam = Camera::fit(View::Front, LO, HI, 200, 200);
     let (px, py) = (120, 80);
     let (_, v) = cam.screen(px as f64, py as f64);
     let r = 0.2 * cam.scale;
     let p = microfrep_core::Expr::xyz();
     let rod = r * r - (&p[1] - 0.0123).square() - (&p[2] - (v + 0.6 * r)).square();
-    let cut = microfrep_core::frep::intersection(&rod, &(0.9 - p[0].square()), 0.0);
-    let tape = Tape::new(&cut);
-    let csg = Csg::new(&cut);
-    assert_eq!(csg.leaves(), 2);
-    let mut tr = Tracer::with_csg(&tape, &csg, &cam, LO, HI);
+    let cut = Shape::new(microfrep_core::frep::intersection(
+        &rod,
+        &(0.9 - p[0].square()),
+        0.0,
+    ));
+    let mut tr = Tracer::new(cut.tape(), &cam, LO, HI);
     assert!(tr.pixel(px, py).is_some());
     assert!(tr.pixel(px, py + 1).is_none());
     // The whole image, tiles of rays searched together first.
-    let img = ray_cast_with(&tape, Some(&csg), &cam, LO, HI);
+    let img = ray_cast(&cut, &cam, LO, HI);
     assert_ne!(img.pixel(px, py), BG);
     assert_eq!(img.pixel(px, py + 1), BG);
 }
 
 #[test]
 fn same_input_same_bytes() {
-    let tape = Tape::new(&shell_lattice());
+    let tape = Shape::from(&shell_lattice());
     let cam = Camera::fit(View::Iso, LO, HI, 96, 64);
     let a = ray_cast(&tape, &cam, LO, HI).encode_png().unwrap();
     let b = ray_cast(&tape, &cam, LO, HI).encode_png().unwrap();
     assert_eq!(a, b);
-    let csg = Csg::new(&shell_lattice());
-    let c = ray_cast_with(&tape, Some(&csg), &cam, LO, HI);
-    assert_eq!(c, ray_cast_with(&tape, Some(&csg), &cam, LO, HI));
 }
 
 #[test]
@@ -136,12 +74,14 @@ fn hit_depth_is_on_the_surface_and_cutaway_reaches_the_inside() {
     let (u, v) = cam.screen(px as f64, py as f64);
     let (x, z) = (u, v); // right is +x and up is +z in this view
     let y_of = |t: f64| cam.point(u, v, t)[1];
-    let solid = Tape::new(&unit_sphere());
-    let t = Tracer::new(&solid, &cam, LO, HI).pixel(px, py).unwrap();
+    let solid = Shape::from(&unit_sphere());
+    let t = Tracer::new(solid.tape(), &cam, LO, HI)
+        .pixel(px, py)
+        .unwrap();
     let surface = -(1.0 - x * x - z * z).sqrt();
     assert!((y_of(t) - surface).abs() < 1e-6, "{} vs {surface}", y_of(t));
-    let cut = Tape::new(&cutaway(&unit_sphere(), View::Front, LO, HI));
-    let t = Tracer::new(&cut, &cam, LO, HI).pixel(px, py).unwrap();
+    let cut = cutaway(&Shape::new(unit_sphere()), View::Front, LO, HI);
+    let t = Tracer::new(cut.tape(), &cam, LO, HI).pixel(px, py).unwrap();
     assert!(y_of(t).abs() < 1e-6, "cut face at y = {}", y_of(t));
 }
 
@@ -157,19 +97,21 @@ fn thin_rod_is_not_skipped() {
     let (yc, zc) = (0.0123, v + 0.6 * r);
     let p = microfrep_core::Expr::xyz();
     let rod = r * r - (&p[1] - yc).square() - (&p[2] - zc).square();
-    let tape = Tape::new(&rod);
-    let t = Tracer::new(&tape, &cam, LO, HI)
+    let tape = Shape::from(&rod);
+    let t = Tracer::new(tape.tape(), &cam, LO, HI)
         .pixel(px, py)
         .expect("rod found");
     let hit = cam.point(u, v, t);
     assert!((hit[1] - yc).abs() <= r, "hit at y = {}", hit[1]);
     // The ray beside it misses.
-    assert!(Tracer::new(&tape, &cam, LO, HI).pixel(px, py + 1).is_none());
+    assert!(Tracer::new(tape.tape(), &cam, LO, HI)
+        .pixel(px, py + 1)
+        .is_none());
 }
 
 #[test]
 fn section_colours_inside_outside_and_zero_contour() {
-    let tape = Tape::new(&unit_sphere());
+    let tape = Shape::from(&unit_sphere());
     let img = section(&tape, "z=0".parse::<Plane>().unwrap(), LO, HI, 101, 101);
     let centre = img.pixel(50, 50);
     let corner = img.pixel(0, 0);

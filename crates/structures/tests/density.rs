@@ -4,7 +4,7 @@
 //! method on a shifted cell) and must hit each target within 0.5 %.
 
 use microfrep_analysis::{measure, Grid};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::Expr;
 use microfrep_structures::density::*;
 use microfrep_structures::sampling::{tet_fraction, volume_fraction_qmc, LevelField};
 use microfrep_structures::struts::{strut_lattice, StrutLattice};
@@ -17,7 +17,7 @@ const TARGETS: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
 /// fraction) at `res` voxels per side, and the analysis' error estimate.
 fn measured(e: &Expr, res: usize) -> (f64, f64) {
     let grid = Grid::new([[0.37; 3], [1.37; 3]], res).unwrap();
-    let m = measure(&Tape::new(e), None, &grid, &|_, _| {});
+    let m = measure(&microfrep_core::Shape::from(e), None, &grid, &|_, _| {});
     (m.volume.value, m.volume.error())
 }
 

@@ -1,13 +1,13 @@
 //! Shared helpers of the analysis tests.
 
 use microfrep_analysis::{measure, Grid, Measures};
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 
 /// Volume and area measures of `e` in `bounds` at `n` voxels on the
 /// longest side, optionally inside `region`.
 pub fn measures(e: &Expr, region: Option<&Expr>, bounds: [[f64; 3]; 2], n: usize) -> Measures {
-    let t = Tape::new(e);
-    let r = region.map(Tape::new);
+    let t = Shape::from(e);
+    let r = region.map(Shape::from);
     measure(&t, r.as_ref(), &Grid::new(bounds, n).unwrap(), &|_, _| {})
 }
 

@@ -1,12 +1,18 @@
 //! The f32 batch evaluator: the tape, lowered to a [`plan::Plan`], runs one
 //! step at a time over blocks of lanes with loops the compiler vectorises.
 
-mod plan;
+pub(crate) mod plan;
 
+use crate::ops::SetOp;
 use crate::ops::{BinaryOp, UnaryOp};
 use crate::simd_math;
-use crate::tape::{Tape, REG_X, REG_Y, REG_Z};
-use plan::{Imm, Pair, Plan, Step};
+use crate::tape::Tape;
+use plan::{Imm, Pair, Plan, SetAlpha, Step};
+use std::sync::Arc;
+
+const REG_X: usize = 0;
+const REG_Y: usize = 1;
+const REG_Z: usize = 2;
 
 /// Points per block: each instruction runs over a whole block, which
 /// amortises dispatch and lets the loops vectorise.
@@ -21,25 +27,36 @@ type Lanes = [f32; BLOCK];
 /// the jumps of discontinuous ops (sin/cos use the polynomial of `simd_math`,
 /// absolute error < 5e-7 for |x| < 1e4); for graphs of up to 16 ops with
 /// Lipschitz constants near 1 and values in [-1, 1], `<= 2e-6`.
-pub struct BatchEval<'t> {
-    tape: &'t Tape,
-    plan: Plan,
+pub struct BatchEval {
+    tape: Tape,
+    plan: Arc<Plan>,
     regs: Vec<Lanes>,
 }
 
-impl<'t> BatchEval<'t> {
-    pub fn new(tape: &'t Tape) -> Self {
-        let plan = plan::lower(tape);
+impl BatchEval {
+    /// An evaluator of `tape` with the parameters at their defaults. The
+    /// tape's lowering is made once and shared by all its batch evaluators.
+    pub fn new(tape: &Tape) -> Self {
+        let plan = tape
+            .0
+            .plan
+            .get_or_init(|| Arc::new(plan::lower(tape)))
+            .clone();
         let mut regs = vec![[0.0f32; BLOCK]; plan.nregs];
         for &(r, c) in &plan.consts {
             regs[r as usize] = [c; BLOCK];
         }
-        for (&r, (_, p)) in plan.params.iter().zip(&tape.params) {
+        for (&r, p) in plan.params.iter().zip(tape.params()) {
             regs[r as usize] = [p.default as f32; BLOCK];
         }
-        BatchEval { tape, plan, regs }
+        BatchEval {
+            tape: tape.clone(),
+            plan,
+            regs,
+        }
     }
 
+    /// Sets parameter `index` (see [`Tape::param_index`]).
     pub fn set_param(&mut self, index: usize, v: f64) {
         self.regs[self.plan.params[index] as usize] = [v as f32; BLOCK];
     }
@@ -93,9 +110,9 @@ impl<'t> BatchEval<'t> {
 
     fn load(&mut self, x: &[f32], y: &[f32], z: &[f32]) {
         let len = x.len();
-        self.regs[REG_X as usize][..len].copy_from_slice(x);
-        self.regs[REG_Y as usize][..len].copy_from_slice(y);
-        self.regs[REG_Z as usize][..len].copy_from_slice(z);
+        self.regs[REG_X][..len].copy_from_slice(x);
+        self.regs[REG_Y][..len].copy_from_slice(y);
+        self.regs[REG_Z][..len].copy_from_slice(z);
     }
 
     fn run(&mut self, len: usize) {
@@ -123,16 +140,20 @@ impl<'t> BatchEval<'t> {
                     }
                     Step::Pair { out, a: x, pair } => run_pair(o(out), a(x), pair),
                     Step::PowI { out, a: x, n } => powi(o(out), a(x), n),
-                    Step::RFun {
+                    Step::SetImm {
+                        op,
                         out,
                         a: x,
                         b: y,
-                        squares,
-                        union,
-                    } => match squares {
-                        None => rfun(o(out), a(x), a(y), union),
-                        Some((qx, qy)) => rfun_sq(o(out), [a(x), a(y), a(qx), a(qy)], union),
-                    },
+                        alpha,
+                    } => set_imm(op, o(out), a(x), a(y), alpha),
+                    Step::Set {
+                        op,
+                        out,
+                        a: x,
+                        b: y,
+                        alpha,
+                    } => set_reg(op, o(out), a(x), a(y), a(alpha)),
                     Step::Select { out, c, a: x, b: y } => map3(
                         o(out),
                         a(c),
@@ -148,7 +169,7 @@ impl<'t> BatchEval<'t> {
                     } => {
                         let (x, y, z) = (a(args[0]), a(args[1]), a(args[2]));
                         let o = o(out);
-                        let f = &self.tape.fields[field as usize];
+                        let f = &self.tape.fields()[field as usize];
                         if comp == 0 {
                             f.eval_batch(&x[..len], &y[..len], &z[..len], &mut o[..len]);
                         } else {
@@ -404,23 +425,31 @@ fn powi(o: &mut Lanes, a: &Lanes, n: i32) {
     }
 }
 
-/// The alpha = 0 R-function, with the same operations in the same order as
-/// the unfused tape so the result is bit-identical.
-fn rfun(o: &mut Lanes, a: &Lanes, b: &Lanes, union: bool) {
-    let root = |x: f32, y: f32| (x * x + y * y).sqrt();
-    if union {
-        map2(o, a, b, |x, y| (x + y) + root(x, y))
-    } else {
-        map2(o, a, b, |x, y| (x + y) - root(x, y))
+/// A set operation with a fixed parameter, with the same f32 operations in
+/// the same order as the written-out formula (so bit-identical to it).
+fn set_imm(op: SetOp, o: &mut Lanes, a: &Lanes, b: &Lanes, alpha: SetAlpha) {
+    let root0 = |x: f32, y: f32| (x * x + y * y).sqrt();
+    match (op, alpha.0) {
+        (SetOp::Union, None) => map2(o, a, b, |x, y| (x + y) + root0(x, y)),
+        (SetOp::Intersection, None) => map2(o, a, b, |x, y| (x + y) - root0(x, y)),
+        (SetOp::Union, Some((c2, k))) => map2(o, a, b, |x, y| {
+            ((x + y) + (x * x + y * y - c2 * x * y).sqrt()) / k
+        }),
+        (SetOp::Intersection, Some((c2, k))) => map2(o, a, b, |x, y| {
+            ((x + y) - (x * x + y * y - c2 * x * y).sqrt()) / k
+        }),
     }
 }
 
-/// The alpha = 0 R-function with the squares of its arguments given.
-fn rfun_sq(o: &mut Lanes, [a, b, qa, qb]: [&Lanes; 4], union: bool) {
-    let sign = if union { 1.0f32 } else { -1.0 };
+/// A set operation whose parameter varies per lane.
+fn set_reg(op: SetOp, o: &mut Lanes, a: &Lanes, b: &Lanes, al: &Lanes) {
+    let sign = if op == SetOp::Union { 1.0f32 } else { -1.0 };
     for i in 0..BLOCK {
-        // Negating the root is exact, so `s + -r` is bit-identical to `s - r`.
-        o[i] = (a[i] + b[i]) + sign * (qa[i] + qb[i]).sqrt();
+        let (x, y, t) = (a[i], b[i], al[i]);
+        let r = (x * x + y * y - 2.0 * t * x * y).sqrt();
+        // Negating the root is exact, so `s + -r` equals `s - r` bit for bit.
+        let v = (x + y) + sign * r;
+        o[i] = if t == 0.0 { v } else { v / (1.0 + t) };
     }
 }
 
@@ -448,22 +477,22 @@ mod tests {
         out
     }
 
-    fn rfun_steps(e: &Expr) -> usize {
+    fn set_steps(e: &Expr) -> usize {
         let plan = lower(&Tape::new(e));
         plan.steps
             .iter()
-            .filter(|s| matches!(s, Step::RFun { .. }))
+            .filter(|s| matches!(s, Step::SetImm { .. } | Step::Set { .. }))
             .count()
     }
 
     #[test]
-    fn fused_r_functions_are_bit_identical_to_their_formula() {
+    fn set_steps_are_bit_identical_to_their_formula() {
         let (x, y, z) = points(700);
         let [px, py, pz] = Expr::xyz();
         let f1 = &px - 0.3;
         let f2 = py.square() - &pz;
         let e = intersection(&union(&f1, &f2, 0.0), &(1.0 - &pz), 0.0);
-        assert_eq!(rfun_steps(&e), 2);
+        assert_eq!(set_steps(&e), 2);
         let got = eval(&e, &x, &y, &z);
         for i in 0..x.len() {
             let (a, b) = (x[i] - 0.3f32, y[i] * y[i] - z[i]);
@@ -472,29 +501,29 @@ mod tests {
             let want = (u + c) - (u * u + c * c).sqrt();
             assert_eq!(got[i].to_bits(), want.to_bits(), "point {i}");
         }
+        // Another alpha: the scaled form with `2 alpha` and `1 + alpha`.
+        let e = union(&f1, &f2, 0.4);
+        assert_eq!(set_steps(&e), 1);
+        let got = eval(&e, &x, &y, &z);
+        for i in 0..x.len() {
+            let (a, b) = (x[i] - 0.3f32, y[i] * y[i] - z[i]);
+            let want = ((a + b) + (a * a + b * b - 0.8f32 * a * b).sqrt()) / 1.4f32;
+            assert_eq!(got[i].to_bits(), want.to_bits(), "point {i}");
+        }
     }
 
     #[test]
-    fn r_functions_with_shared_squares_read_them() {
+    fn set_steps_with_a_field_parameter_match_the_reference() {
         let (x, y, z) = points(700);
-        let [px, py, _] = Expr::xyz();
-        let e = intersection(&px, &py, 0.0) * px.square();
-        let plan = lower(&Tape::new(&e));
-        let with_squares = plan.steps.iter().filter(|s| {
-            matches!(
-                s,
-                Step::RFun {
-                    squares: Some(_),
-                    ..
-                }
-            )
-        });
-        assert_eq!(with_squares.count(), 1, "{:?}", plan.steps);
+        let [px, py, pz] = Expr::xyz();
+        let alpha = 0.5 * (pz.sin());
+        let e = intersection(&(&px - 0.3), &py, alpha);
+        let tape = Tape::new(&e);
         let got = eval(&e, &x, &y, &z);
+        let mut point = PointEval::new(&tape);
         for i in 0..x.len() {
-            let (a, b) = (x[i], y[i]);
-            let want = ((a + b) - (a * a + b * b).sqrt()) * (a * a);
-            assert_eq!(got[i].to_bits(), want.to_bits(), "point {i}");
+            let want = point.eval([x[i] as f64, y[i] as f64, z[i] as f64]);
+            assert!((got[i] as f64 - want).abs() < 1e-5, "{} vs {want}", got[i]);
         }
     }
 
@@ -504,7 +533,7 @@ mod tests {
         let [px, py, _] = Expr::xyz();
         let root = (px.square() + py.square()).sqrt();
         let e = (&px + &py + &root) * &root;
-        assert_eq!(rfun_steps(&e), 0);
+        assert_eq!(set_steps(&e), 0);
         let (x, y, z) = points(300);
         let got = eval(&e, &x, &y, &z);
         for i in 0..x.len() {

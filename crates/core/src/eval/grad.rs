@@ -1,7 +1,7 @@
 use super::batch::BLOCK;
 use super::deriv::{binary_partials, powi_derivative, unary_derivative};
 use crate::field::Field;
-use crate::tape::{Instr, Tape, REG_X, REG_Y, REG_Z};
+use crate::tape::{Op, Tape};
 
 /// Value and gradient of one register.
 type Dual = (f64, [f64; 3]);
@@ -60,80 +60,97 @@ fn field_dual(f: &dyn Field, comp: u8, q: [Dual; 3]) -> Dual {
 
 /// Forward-mode gradient evaluator for single points in f64 (the reference,
 /// used for Newton steps, normals and the normalised offset checks).
-pub struct GradEval<'t> {
-    tape: &'t Tape,
-    regs: Vec<Dual>,
+pub struct GradEval {
+    tape: Tape,
+    params: Vec<f64>,
+    slots: Vec<Dual>,
 }
 
-impl<'t> GradEval<'t> {
-    pub fn new(tape: &'t Tape) -> Self {
-        let mut regs = vec![(0.0, [0.0; 3]); tape.nregs];
-        for (r, v) in tape.preload() {
-            regs[r as usize] = (v, [0.0; 3]);
+impl GradEval {
+    /// An evaluator of `tape` with the parameters at their defaults.
+    pub fn new(tape: &Tape) -> Self {
+        GradEval {
+            tape: tape.clone(),
+            params: tape.params().iter().map(|p| p.default).collect(),
+            slots: vec![(0.0, [0.0; 3]); tape.ops().len()],
         }
-        GradEval { tape, regs }
     }
 
+    /// Sets parameter `index` (see [`Tape::param_index`]).
     pub fn set_param(&mut self, index: usize, v: f64) {
-        self.regs[self.tape.params[index].0 as usize] = (v, [0.0; 3]);
+        self.params[index] = v;
     }
 
     /// Value and gradient of the first output at `p`.
     pub fn eval(&mut self, p: [f64; 3]) -> (f64, [f64; 3]) {
-        let r = &mut self.regs;
-        r[REG_X as usize] = (p[0], [1.0, 0.0, 0.0]);
-        r[REG_Y as usize] = (p[1], [0.0, 1.0, 0.0]);
-        r[REG_Z as usize] = (p[2], [0.0, 0.0, 1.0]);
-        for ins in &self.tape.instrs {
-            match *ins {
-                Instr::Unary { op, out, a } => {
-                    let (av, ad) = r[a as usize];
-                    let v = op.apply(av);
-                    let k = unary_derivative(op, av, v);
-                    r[out as usize] = (v, lin(&ad, k));
+        self.eval_output(0, p)
+    }
+
+    /// Value and gradient of output `k` at `p`.
+    pub fn eval_output(&mut self, k: usize, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let s = &mut self.slots;
+        for (i, op) in self.tape.ops().iter().enumerate() {
+            s[i] = match *op {
+                Op::Var(a) => {
+                    let mut d = [0.0; 3];
+                    d[a as usize] = 1.0;
+                    (p[a as usize], d)
                 }
-                Instr::Binary { op, out, a, b } => {
-                    let (av, ad) = r[a as usize];
-                    let (bv, bd) = r[b as usize];
+                Op::Const(c) => (c, [0.0; 3]),
+                Op::Param(k) => (self.params[k as usize], [0.0; 3]),
+                Op::Unary(op, a) => {
+                    let (av, ad) = s[a as usize];
+                    let v = op.apply(av);
+                    (v, lin(&ad, unary_derivative(op, av, v)))
+                }
+                Op::Binary(op, a, b) => {
+                    let (av, ad) = s[a as usize];
+                    let (bv, bd) = s[b as usize];
                     let v = op.apply(av, bv);
                     let (ka, kb) = binary_partials(op, av, bv, v);
-                    r[out as usize] = (v, lin2(&ad, ka, &bd, kb));
+                    (v, lin2(&ad, ka, &bd, kb))
                 }
-                Instr::PowI { out, a, n } => {
-                    let (av, ad) = r[a as usize];
-                    r[out as usize] = (av.powi(n), lin(&ad, powi_derivative(av, n)));
+                Op::PowI(a, n) => {
+                    let (av, ad) = s[a as usize];
+                    (av.powi(n), lin(&ad, powi_derivative(av, n)))
                 }
-                Instr::Select { out, c, a, b } => {
-                    r[out as usize] = if r[c as usize].0 != 0.0 {
-                        r[a as usize]
+                Op::Select(c, a, b) => {
+                    if s[c as usize].0 != 0.0 {
+                        s[a as usize]
                     } else {
-                        r[b as usize]
-                    };
+                        s[b as usize]
+                    }
                 }
-                Instr::Field {
-                    out,
-                    field,
-                    comp,
-                    args,
-                } => {
-                    let q = args.map(|a| r[a as usize]);
-                    r[out as usize] = field_dual(&*self.tape.fields[field as usize], comp, q);
+                Op::Set { op, a, b, alpha } => {
+                    let (av, ad) = s[a as usize];
+                    let (bv, bd) = s[b as usize];
+                    let (cv, cd) = s[alpha as usize];
+                    let v = op.apply(av, bv, cv);
+                    let (ka, kb, kc) = op.partials(av, bv, cv, v);
+                    let d = lin2(&ad, ka, &bd, kb);
+                    let e = lin(&cd, kc);
+                    (v, [d[0] + e[0], d[1] + e[1], d[2] + e[2]])
                 }
-            }
+                Op::Field { field, comp, args } => {
+                    let q = args.map(|a| s[a as usize]);
+                    field_dual(&*self.tape.fields()[field as usize], comp, q)
+                }
+            };
         }
-        r[self.tape.outputs[0] as usize]
+        s[self.tape.outputs()[k] as usize]
     }
 }
 
 /// Batched gradients in f32: value and the three partials for many points,
 /// e.g. the normals of every vertex of a mesh. Each block is computed with
 /// the f64 rules and stored as f32.
-pub struct GradBatchEval<'t> {
-    inner: GradEval<'t>,
+pub struct GradBatchEval {
+    inner: GradEval,
 }
 
-impl<'t> GradBatchEval<'t> {
-    pub fn new(tape: &'t Tape) -> Self {
+impl GradBatchEval {
+    /// An evaluator of `tape` with the parameters at their defaults.
+    pub fn new(tape: &Tape) -> Self {
         GradBatchEval {
             inner: GradEval::new(tape),
         }

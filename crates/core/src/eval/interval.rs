@@ -1,28 +1,35 @@
 use crate::interval::Interval;
-use crate::tape::{Instr, Tape, REG_X, REG_Y, REG_Z};
+use crate::tape::{Op, Tape};
 
 /// Interval evaluator: bounds of the model over an axis-aligned box.
-pub struct IntervalEval<'t> {
-    tape: &'t Tape,
-    regs: Vec<Interval>,
+pub struct IntervalEval {
+    tape: Tape,
+    params: Vec<Interval>,
+    slots: Vec<Interval>,
 }
 
-impl<'t> IntervalEval<'t> {
-    pub fn new(tape: &'t Tape) -> Self {
-        let mut regs = vec![Interval::point(0.0); tape.nregs];
-        for (r, v) in tape.preload() {
-            regs[r as usize] = Interval::point(v);
+impl IntervalEval {
+    /// An evaluator of `tape` with the parameters at their defaults.
+    pub fn new(tape: &Tape) -> Self {
+        IntervalEval {
+            tape: tape.clone(),
+            params: tape
+                .params()
+                .iter()
+                .map(|p| Interval::point(p.default))
+                .collect(),
+            slots: vec![Interval::point(0.0); tape.ops().len()],
         }
-        IntervalEval { tape, regs }
     }
 
+    /// Sets parameter `index` to one value.
     pub fn set_param(&mut self, index: usize, v: f64) {
-        self.regs[self.tape.params[index].0 as usize] = Interval::point(v);
+        self.params[index] = Interval::point(v);
     }
 
     /// Bounds a parameter over a range instead of a single value.
     pub fn set_param_interval(&mut self, index: usize, v: Interval) {
-        self.regs[self.tape.params[index].0 as usize] = v;
+        self.params[index] = v;
     }
 
     /// Bounds of the first output over the box `[x] x [y] x [z]`.
@@ -30,50 +37,53 @@ impl<'t> IntervalEval<'t> {
         self.eval_output(0, x, y, z)
     }
 
+    /// Bounds of output `k` over the box.
     pub fn eval_output(&mut self, k: usize, x: Interval, y: Interval, z: Interval) -> Interval {
-        self.run(x, y, z);
-        self.regs[self.tape.outputs[k] as usize]
+        self.run([x, y, z]);
+        self.slots[self.tape.outputs()[k] as usize]
     }
 
     /// Bounds of every output, in one pass over the tape.
     pub fn eval_all(&mut self, x: Interval, y: Interval, z: Interval) -> Vec<Interval> {
-        self.run(x, y, z);
-        let r = &self.regs;
-        self.tape.outputs.iter().map(|&o| r[o as usize]).collect()
+        self.run([x, y, z]);
+        let s = &self.slots;
+        self.tape.outputs().iter().map(|&o| s[o as usize]).collect()
     }
 
-    fn run(&mut self, x: Interval, y: Interval, z: Interval) {
-        let r = &mut self.regs;
-        r[REG_X as usize] = x;
-        r[REG_Y as usize] = y;
-        r[REG_Z as usize] = z;
-        for ins in &self.tape.instrs {
-            match *ins {
-                Instr::Unary { op, out, a } => r[out as usize] = r[a as usize].unary(op),
-                Instr::Binary { op, out, a, b } => {
-                    r[out as usize] = r[a as usize].binary(op, r[b as usize])
+    /// The bounds of every value of the tape after the last evaluation
+    /// (what per-region simplification reads).
+    pub fn values(&self) -> &[Interval] {
+        &self.slots
+    }
+
+    fn run(&mut self, p: [Interval; 3]) {
+        let s = &mut self.slots;
+        for (i, op) in self.tape.ops().iter().enumerate() {
+            s[i] = match *op {
+                Op::Var(a) => p[a as usize],
+                Op::Const(c) => Interval::point(c),
+                Op::Param(k) => self.params[k as usize],
+                Op::Unary(op, a) => s[a as usize].unary(op),
+                Op::Binary(op, a, b) => s[a as usize].binary(op, s[b as usize]),
+                Op::PowI(a, n) => s[a as usize].powi(n),
+                Op::Select(c, a, b) => {
+                    Interval::select(s[c as usize], s[a as usize], s[b as usize])
                 }
-                Instr::PowI { out, a, n } => r[out as usize] = r[a as usize].powi(n),
-                Instr::Select { out, c, a, b } => {
-                    r[out as usize] = Interval::select(r[c as usize], r[a as usize], r[b as usize])
+                Op::Set { op, a, b, alpha } => {
+                    Interval::set(op, s[a as usize], s[b as usize], s[alpha as usize])
                 }
-                Instr::Field {
-                    out,
-                    field,
-                    comp,
-                    args,
-                } => {
-                    let q = args.map(|a| r[a as usize]);
-                    let f = &self.tape.fields[field as usize];
+                Op::Field { field, comp, args } => {
+                    let q = args.map(|a| s[a as usize]);
+                    let f = &self.tape.fields()[field as usize];
                     let v = if comp == 0 {
                         f.interval(q)
                     } else {
                         f.grad_interval(q)[comp as usize - 1]
                     };
                     // A NaN coordinate makes the field NaN.
-                    r[out as usize] = v.with_nan(q.iter().any(Interval::may_be_nan));
+                    v.with_nan(q.iter().any(Interval::may_be_nan))
                 }
-            }
+            };
         }
     }
 }

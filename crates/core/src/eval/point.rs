@@ -1,72 +1,80 @@
 use crate::field::Field;
-use crate::tape::{Instr, Tape, REG_X, REG_Y, REG_Z};
+use crate::tape::{Op, Tape};
 
 /// Reference evaluator: one point at a time in f64.
-pub struct PointEval<'t> {
-    tape: &'t Tape,
-    regs: Vec<f64>,
+pub struct PointEval {
+    tape: Tape,
+    params: Vec<f64>,
+    slots: Vec<f64>,
 }
 
-impl<'t> PointEval<'t> {
-    pub fn new(tape: &'t Tape) -> Self {
-        let mut regs = vec![0.0; tape.nregs];
-        for (r, v) in tape.preload() {
-            regs[r as usize] = v;
+impl PointEval {
+    /// An evaluator of `tape` with the parameters at their defaults.
+    pub fn new(tape: &Tape) -> Self {
+        PointEval {
+            tape: tape.clone(),
+            params: tape.params().iter().map(|p| p.default).collect(),
+            slots: vec![0.0; tape.ops().len()],
         }
-        PointEval { tape, regs }
     }
 
     /// Sets parameter `index` (see [`Tape::param_index`]).
     pub fn set_param(&mut self, index: usize, v: f64) {
-        self.regs[self.tape.params[index].0 as usize] = v;
+        self.params[index] = v;
     }
 
     /// Value of the first output at `p`.
     pub fn eval(&mut self, p: [f64; 3]) -> f64 {
         self.run(p);
-        self.regs[self.tape.outputs[0] as usize]
+        self.slots[self.tape.outputs()[0] as usize]
+    }
+
+    /// Value of output `k` at `p`.
+    pub fn eval_output(&mut self, k: usize, p: [f64; 3]) -> f64 {
+        self.run(p);
+        self.slots[self.tape.outputs()[k] as usize]
     }
 
     /// Values of all outputs at `p`.
     pub fn eval_all(&mut self, p: [f64; 3]) -> Vec<f64> {
         self.run(p);
         self.tape
-            .outputs
+            .outputs()
             .iter()
-            .map(|&r| self.regs[r as usize])
+            .map(|&r| self.slots[r as usize])
             .collect()
     }
 
+    /// Every value of the tape after the last evaluation.
+    pub fn values(&self) -> &[f64] {
+        &self.slots
+    }
+
     fn run(&mut self, p: [f64; 3]) {
-        let r = &mut self.regs;
-        r[REG_X as usize] = p[0];
-        r[REG_Y as usize] = p[1];
-        r[REG_Z as usize] = p[2];
-        for ins in &self.tape.instrs {
-            match *ins {
-                Instr::Unary { op, out, a } => r[out as usize] = op.apply(r[a as usize]),
-                Instr::Binary { op, out, a, b } => {
-                    r[out as usize] = op.apply(r[a as usize], r[b as usize])
-                }
-                Instr::PowI { out, a, n } => r[out as usize] = r[a as usize].powi(n),
-                Instr::Select { out, c, a, b } => {
-                    r[out as usize] = if r[c as usize] != 0.0 {
-                        r[a as usize]
+        let s = &mut self.slots;
+        for (i, op) in self.tape.ops().iter().enumerate() {
+            s[i] = match *op {
+                Op::Var(a) => p[a as usize],
+                Op::Const(c) => c,
+                Op::Param(k) => self.params[k as usize],
+                Op::Unary(op, a) => op.apply(s[a as usize]),
+                Op::Binary(op, a, b) => op.apply(s[a as usize], s[b as usize]),
+                Op::PowI(a, n) => s[a as usize].powi(n),
+                Op::Select(c, a, b) => {
+                    if s[c as usize] != 0.0 {
+                        s[a as usize]
                     } else {
-                        r[b as usize]
+                        s[b as usize]
                     }
                 }
-                Instr::Field {
-                    out,
-                    field,
-                    comp,
-                    args,
-                } => {
-                    let q = args.map(|a| r[a as usize]);
-                    let f = &self.tape.fields[field as usize];
-                    r[out as usize] = field_component(&**f, comp, q);
+                Op::Set { op, a, b, alpha } => {
+                    op.apply(s[a as usize], s[b as usize], s[alpha as usize])
                 }
-            }
+                Op::Field { field, comp, args } => {
+                    let q = args.map(|a| s[a as usize]);
+                    field_component(&*self.tape.fields()[field as usize], comp, q)
+                }
+            };
         }
     }
 }

@@ -61,7 +61,7 @@ pub fn block(p: &P3, v: &P3, w: &P3) -> Expr {
     let s: Vec<Expr> = (0..3)
         .map(|i| (&p[i] - &v[i]) * (&v[i] + &w[i] - &p[i]))
         .collect();
-    let r0 = |a: &Expr, b: &Expr| a + b - (a.square() + b.square()).sqrt();
+    let r0 = |a: &Expr, b: &Expr| Expr::set(crate::SetOp::Intersection, a, b, 0.0);
     r0(&r0(&s[0], &s[1]), &s[2])
 }
 

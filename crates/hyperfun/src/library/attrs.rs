@@ -60,7 +60,7 @@ pub(super) fn register(r: &mut Registry) {
 /// `out` (argument 2) where the union is (nearly) inside.
 fn union(a: &[Arg]) -> Output {
     let (f1, f2, op) = (a[0].real(), a[1].real(), a[5].real());
-    let v = &f1 + &f2 + (f1.square() + f2.square()).sqrt();
+    let v = super::r0_or(&f1, &f2);
     let (out, c1, c2) = (a[2].array(), a[3].array(), a[4].array());
     let only1 = f1.ge(0.0).and(f2.lt(0.0));
     let only2 = f2.ge(0.0).and(f1.lt(0.0));

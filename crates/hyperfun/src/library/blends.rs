@@ -3,22 +3,28 @@
 //! solver and is not registered yet.
 
 use super::{Arg, Kind::*, Output, Registry};
-use microfrep_core::Expr;
+use microfrep_core::{Expr, SetOp};
 
-/// Displacement `a0 / (1 + (f1/a1)^2 + (f2/a2)^2)` shared by both blends.
-fn bump(a: &[Arg]) -> Expr {
-    let (f1, f2) = (a[0].real(), a[1].real());
-    a[2].real() / (1.0 + (f1 / a[3].real()).square() + (f2 / a[4].real()).square())
+/// `hfBlendUni`/`hfBlendInt`: the alpha = 0 R-function plus the
+/// displacement `a0 / (1 + (f1/a1)^2 + (f2/a2)^2)`, as a blend node.
+fn blend(op: SetOp, a: &[Arg]) -> Output {
+    let args = [
+        a[0].real(),
+        a[1].real(),
+        Expr::constant(0.0),
+        a[2].real(),
+        a[3].real(),
+        a[4].real(),
+    ];
+    Output::value(Expr::blend(op, args))
 }
 
 fn blend_uni(a: &[Arg]) -> Output {
-    let (f1, f2) = (a[0].real(), a[1].real());
-    Output::value(&f1 + &f2 + (f1.square() + f2.square()).sqrt() + bump(a))
+    blend(SetOp::Union, a)
 }
 
 fn blend_int(a: &[Arg]) -> Output {
-    let (f1, f2) = (a[0].real(), a[1].real());
-    Output::value(&f1 + &f2 - (f1.square() + f2.square()).sqrt() + bump(a))
+    blend(SetOp::Intersection, a)
 }
 
 /// Roots of `(d - f1 - s)^2 + (d - f2 - s)^2 = r^2`: `d = m ± sqrt(disc)/2`

@@ -182,12 +182,12 @@ impl Registry {
 
 /// `R0&(u, v) = u + v - sqrt(u^2 + v^2)`.
 pub fn r0_and(u: &Expr, v: &Expr) -> Expr {
-    u + v - (u.square() + v.square()).sqrt()
+    Expr::set(microfrep_core::SetOp::Intersection, u, v, 0.0)
 }
 
 /// `R0|(u, v) = u + v + sqrt(u^2 + v^2)`.
 pub fn r0_or(u: &Expr, v: &Expr) -> Expr {
-    u + v + (u.square() + v.square()).sqrt()
+    Expr::set(microfrep_core::SetOp::Union, u, v, 0.0)
 }
 
 /// `v` unless the point array has the wrong length (then the sentinel).

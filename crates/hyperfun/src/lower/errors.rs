@@ -1,22 +1,10 @@
 //! The table behind the error output: code `k > 0` names entry `k - 1`.
 
-use std::fmt;
 use std::sync::{Arc, Mutex};
 
 /// A run-time error as the reference reports it: message and the position of
-/// the offending operator or call.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
-pub struct RuntimeError {
-    pub message: String,
-    pub line: u32,
-    pub col: u32,
-}
-
-impl fmt::Display for RuntimeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} at {}:{}", self.message, self.line, self.col)
-    }
-}
+/// the offending operator or call (the core's type, shared by every model source).
+pub use microfrep_core::RuntimeError;
 
 /// Shared, append-only table of error sites. The lowered graph fills it once;
 /// the per-point fallback may add sites as it meets them.
@@ -50,5 +38,11 @@ impl ErrorTable {
     /// A copy of the sites known so far.
     pub fn snapshot(&self) -> Vec<RuntimeError> {
         self.0.lock().unwrap_or_else(|p| p.into_inner()).clone()
+    }
+}
+
+impl microfrep_core::ErrorSource for ErrorTable {
+    fn decode(&self, code: f64) -> Option<RuntimeError> {
+        self.get(code)
     }
 }

@@ -21,7 +21,7 @@ pub use usage::calls_of;
 use crate::ast::{Pos, Program};
 use crate::library::Registry;
 use exec::{Exec, Inputs, Stop};
-use microfrep_core::{Expr, PointEval, Tape};
+use microfrep_core::{Expr, PointEval, Shape, Tape};
 use std::sync::Arc;
 
 /// Default object name of the reference polygonizer.
@@ -169,6 +169,13 @@ fn guard(value: Expr, error: &Expr) -> Expr {
 }
 
 impl Model {
+    /// The model as a core [`Shape`]: the value, with the error code as its
+    /// error channel (decoded by this model's error table).
+    pub fn shape(&self) -> Shape {
+        Shape::new(self.value.clone())
+            .with_errors(self.error.clone(), Arc::new(self.errors.clone()))
+    }
+
     /// Value and error code in one tape (outputs 0 and 1).
     pub fn tape(&self) -> Tape {
         Tape::with_outputs(&[self.value.clone(), self.error.clone()])

@@ -3,7 +3,7 @@
 //! reference interpreter raises a run-time error.
 
 use crate::library::EPS;
-use microfrep_core::Expr;
+use microfrep_core::{Expr, SetOp};
 
 /// A run-time error condition: truth value (1 = error) and message.
 pub type Fault = (Expr, &'static str);
@@ -46,20 +46,17 @@ pub fn hf_round_f(d: f64) -> f64 {
     }
 }
 
-/// `sqrt(|a^2 + b^2 - 2 ALPHA a b|)` of the R-functions at ALPHA = 0. The
-/// spec's `abs` is left out: a sum of squares is never negative (and NaN
-/// stays NaN), so the value, gradient and interval are identical without
-/// it, and the tape is one instruction shorter per operator.
-fn r0_root(a: &Expr, b: &Expr) -> Expr {
-    (a.square() + b.square()).sqrt()
-}
-
+/// HyperFun's `|`: the R-function union at ALPHA = 0, a set node of the
+/// core graph. (The spec's `abs` under the root is left out: a sum of
+/// squares is never negative and NaN stays NaN, so values, gradients and
+/// intervals are the same without it.)
 pub fn union(a: &Expr, b: &Expr) -> Expr {
-    a + b + r0_root(a, b)
+    Expr::set(SetOp::Union, a, b, 0.0)
 }
 
+/// HyperFun's `&`: the R-function intersection at ALPHA = 0.
 pub fn intersection(a: &Expr, b: &Expr) -> Expr {
-    a + b - r0_root(a, b)
+    Expr::set(SetOp::Intersection, a, b, 0.0)
 }
 
 pub fn subtraction(a: &Expr, b: &Expr) -> Expr {

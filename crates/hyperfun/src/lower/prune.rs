@@ -30,7 +30,7 @@ fn reachable(sites: &[(Expr, f64)]) -> Vec<bool> {
     }
     let tape = Tape::with_outputs(&conds);
     let mut ie = IntervalEval::new(&tape);
-    for k in 0..tape.params().count() {
+    for k in 0..tape.params().len() {
         ie.set_param_interval(k, Interval::ENTIRE);
     }
     let all = Interval::ENTIRE;

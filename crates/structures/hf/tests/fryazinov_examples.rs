@@ -53,7 +53,7 @@ fn fig4_toriball_block_matches_algorithm_1_and_meshes_watertight() {
     assert!(!p.inside([0.0; 3]) && !p.inside([0.4, -0.2, 0.6]));
     // The tube of the x torus of the centre cell, at radius 0.8 * 0.1.
     assert!(p.inside([0.0, 0.08, 0.0]));
-    let mesh = Plan::new(&m.value, &MeshOptions::new([[-1.0; 3], [1.0; 3]], 64))
+    let mesh = Plan::new(&m.shape(), &MeshOptions::new([[-1.0; 3], [1.0; 3]], 64))
         .unwrap()
         .run(&|_| {})
         .unwrap();

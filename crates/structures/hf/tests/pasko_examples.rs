@@ -105,7 +105,7 @@ fn fig3a_sphere_shell_with_lattice() {
         "{vol}"
     );
     // Watertight through the mesher, with the same volume.
-    let mesh = Plan::new(&m.value, &MeshOptions::new([[b[0]; 3], [b[1]; 3]], 48))
+    let mesh = Plan::new(&m.shape(), &MeshOptions::new([[b[0]; 3], [b[1]; 3]], 48))
         .unwrap()
         .run(&|_| {})
         .unwrap();

@@ -2,19 +2,19 @@
 //!
 //! Each batch step streams whole blocks through the L1 cache, so its cost is
 //! mostly loads and stores. The plan cuts them: constant operands become
-//! immediates broadcast in the loop instead of register blocks; the alpha = 0
-//! R-functions `a + b ± sqrt(a² + b²)` (six tape instructions, the bulk of
-//! most FRep models) run as one step; and two one-operand steps in a row
+//! immediates broadcast in the loop instead of register blocks; set
+//! operations (R-functions, the bulk of most FRep models) are single steps
+//! with their parameter as an immediate; and two one-operand steps in a row
 //! (`2 * t - 1`, `tri(x / w)`, `sin(v) - l`: the scalings around waves and
 //! periodic functions) run as one, their temporaries kept in vector
 //! registers. Results are bit-identical to the unfused code: the same f32
 //! operations run in the same order.
 //!
-//! Fusion removes intermediate values, so the plan takes the tape to SSA form,
-//! rewrites it there and allocates its own registers.
+//! The plan rewrites the tape's SSA values and then gives them registers:
+//! this is the core's one register allocator ([`allocate`]).
 
-use crate::ops::{BinaryOp, UnaryOp};
-use crate::tape::{Instr, Tape};
+use crate::ops::{BinaryOp, SetOp, UnaryOp};
+use crate::tape::{Op, Tape};
 
 /// One value of the SSA form; operands are indices of earlier values.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,16 +34,36 @@ enum Val {
         comp: u8,
         args: [usize; 3],
     },
-    RFun {
+    Set {
+        op: SetOp,
         a: usize,
         b: usize,
-        squares: Option<(usize, usize)>,
-        union: bool,
+        alpha: usize,
+    },
+    /// A set operation with a constant parameter.
+    SetImm {
+        op: SetOp,
+        a: usize,
+        b: usize,
+        alpha: SetAlpha,
     },
     Pair {
         a: usize,
         pair: Pair,
     },
+}
+
+/// The constants of a set operation with a fixed parameter, rounded to f32
+/// from their f64 values as constant folding of the written-out formula
+/// would (`2 alpha` and `1 + alpha`); `None` for alpha = 0, which has no
+/// scale and no product term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct SetAlpha(pub Option<(f32, f32)>);
+
+impl SetAlpha {
+    fn new(alpha: f64) -> SetAlpha {
+        SetAlpha((alpha != 0.0).then(|| ((2.0 * alpha) as f32, (1.0 + alpha) as f32)))
+    }
 }
 
 /// A binary op with a constant operand: `a op c`, or `c op a` when `left`.
@@ -118,15 +138,21 @@ pub(super) enum Step {
         comp: u8,
         args: [u32; 3],
     },
-    /// `a + b + sqrt(a*a + b*b)` (union) or `a + b - sqrt(a*a + b*b)`;
-    /// with `squares`, `a*a` and `b*b` are read from those registers
-    /// (they have other readers, so they are computed anyway).
-    RFun {
+    /// A set operation whose parameter is a register.
+    Set {
+        op: SetOp,
         out: u32,
         a: u32,
         b: u32,
-        squares: Option<(u32, u32)>,
-        union: bool,
+        alpha: u32,
+    },
+    /// A set operation with a constant parameter.
+    SetImm {
+        op: SetOp,
+        out: u32,
+        a: u32,
+        b: u32,
+        alpha: SetAlpha,
     },
     Pair {
         out: u32,
@@ -135,8 +161,9 @@ pub(super) enum Step {
     },
 }
 
-pub(super) struct Plan {
-    pub steps: Vec<Step>,
+#[derive(Debug)]
+pub(crate) struct Plan {
+    pub(super) steps: Vec<Step>,
     pub nregs: usize,
     /// Registers preloaded with constants that stayed register operands.
     pub consts: Vec<(u32, f32)>,
@@ -145,48 +172,47 @@ pub(super) struct Plan {
     pub outputs: Vec<u32>,
 }
 
-pub(super) fn lower(tape: &Tape) -> Plan {
+pub(crate) fn lower(tape: &Tape) -> Plan {
     let (mut vals, outputs) = to_ssa(tape);
-    fuse_rfun(&mut vals, &outputs);
     fold_immediates(&mut vals);
     fuse_pairs(&mut vals, &outputs);
-    allocate(&vals, &outputs, tape.params.len())
+    allocate(&vals, &outputs, tape.params().len())
 }
 
 fn to_ssa(tape: &Tape) -> (Vec<Val>, Vec<usize>) {
-    let mut vals = Vec::with_capacity(tape.nregs + tape.instrs.len());
-    let mut cur = vec![usize::MAX; tape.nregs];
-    for (r, c) in cur.iter_mut().enumerate().take(3) {
-        *c = vals.len();
-        vals.push(Val::Input(r as u32));
-    }
-    for &(r, c) in &tape.consts {
-        cur[r as usize] = vals.len();
-        vals.push(Val::Const(c as f32));
-    }
-    for (k, (r, _)) in tape.params.iter().enumerate() {
-        cur[*r as usize] = vals.len();
-        vals.push(Val::Param(k));
-    }
-    for ins in &tape.instrs {
-        let v = |r: u32| cur[r as usize];
-        let val = match *ins {
-            Instr::Unary { op, a, .. } => Val::Unary(op, v(a)),
-            Instr::Binary { op, a, b, .. } => Val::Binary(op, v(a), v(b)),
-            Instr::PowI { a, n, .. } => Val::PowI(v(a), n),
-            Instr::Select { c, a, b, .. } => Val::Select(v(c), v(a), v(b)),
-            Instr::Field {
-                field, comp, args, ..
-            } => Val::Field {
+    let vals = tape
+        .ops()
+        .iter()
+        .map(|op| match *op {
+            Op::Var(a) => Val::Input(a as u32),
+            Op::Const(c) => Val::Const(c as f32),
+            Op::Param(k) => Val::Param(k as usize),
+            Op::Unary(op, a) => Val::Unary(op, a as usize),
+            Op::Binary(op, a, b) => Val::Binary(op, a as usize, b as usize),
+            Op::PowI(a, n) => Val::PowI(a as usize, n),
+            Op::Select(c, a, b) => Val::Select(c as usize, a as usize, b as usize),
+            Op::Set { op, a, b, alpha } => match tape.ops()[alpha as usize] {
+                Op::Const(c) => Val::SetImm {
+                    op,
+                    a: a as usize,
+                    b: b as usize,
+                    alpha: SetAlpha::new(c),
+                },
+                _ => Val::Set {
+                    op,
+                    a: a as usize,
+                    b: b as usize,
+                    alpha: alpha as usize,
+                },
+            },
+            Op::Field { field, comp, args } => Val::Field {
                 field,
                 comp,
-                args: args.map(v),
+                args: args.map(|a| a as usize),
             },
-        };
-        cur[ins.out() as usize] = vals.len();
-        vals.push(val);
-    }
-    let outputs = tape.outputs.iter().map(|&r| cur[r as usize]).collect();
+        })
+        .collect();
+    let outputs = tape.outputs().iter().map(|&o| o as usize).collect();
     (vals, outputs)
 }
 
@@ -197,10 +223,8 @@ fn operands(v: &Val) -> Vec<usize> {
             vec![a]
         }
         Val::Binary(_, a, b) => vec![a, b],
-        Val::RFun { a, b, squares, .. } => match squares {
-            Some((qa, qb)) => vec![a, b, qa, qb],
-            None => vec![a, b],
-        },
+        Val::Set { a, b, alpha, .. } => vec![a, b, alpha],
+        Val::SetImm { a, b, .. } => vec![a, b],
         Val::Select(c, a, b) => vec![c, a, b],
         Val::Field { args, .. } => args.to_vec(),
     }
@@ -217,50 +241,6 @@ fn use_counts(vals: &[Val], outputs: &[usize]) -> Vec<usize> {
         uses[o] += 1;
     }
     uses
-}
-
-/// Rewrites `s ± sqrt(square(p) + square(q))` with `s = p + q` into one
-/// R-function value when the sum and the root have no other reader
-/// (otherwise they must be computed anyway and fusing would only add work).
-fn fuse_rfun(vals: &mut [Val], outputs: &[usize]) {
-    let uses = use_counts(vals, outputs);
-    let single = |i: usize| uses[i] == 1;
-    for n in 0..vals.len() {
-        let (union, cands) = match vals[n] {
-            Val::Binary(BinaryOp::Add, x, y) => (true, vec![(x, y), (y, x)]),
-            Val::Binary(BinaryOp::Sub, x, y) => (false, vec![(x, y)]),
-            _ => continue,
-        };
-        for (s, r) in cands {
-            let Val::Unary(UnaryOp::Sqrt, t) = vals[r] else {
-                continue;
-            };
-            let Val::Binary(BinaryOp::Add, qa, qb) = vals[t] else {
-                continue;
-            };
-            let (Val::Unary(UnaryOp::Square, p), Val::Unary(UnaryOp::Square, q)) =
-                (vals[qa], vals[qb])
-            else {
-                continue;
-            };
-            let Val::Binary(BinaryOp::Add, sa, sb) = vals[s] else {
-                continue;
-            };
-            let same_pair = (sa, sb) == (p, q) || (sa, sb) == (q, p);
-            if !same_pair || ![s, r, t].into_iter().all(single) {
-                continue;
-            }
-            // Squares with other readers stay values of their own.
-            let squares = (!single(qa) || !single(qb)).then_some((qa, qb));
-            vals[n] = Val::RFun {
-                a: p,
-                b: q,
-                squares,
-                union,
-            };
-            break;
-        }
-    }
 }
 
 /// Turns binary ops with one constant operand into immediate forms.
@@ -310,7 +290,7 @@ fn fuse_pairs(vals: &mut [Val], outputs: &[usize]) {
     }
 }
 
-/// Register allocation over the values reachable from the outputs: x, y, z
+/// The register allocator: allocation over the values reachable from the outputs: x, y, z
 /// in registers 0..3, then parameters and the constants still read from
 /// registers, then temporaries, reused once their last reader has run (and
 /// only after it has written, so an output never aliases its inputs).
@@ -399,17 +379,19 @@ fn allocate(vals: &[Val], outputs: &[usize], nparams: usize) -> Plan {
                 comp,
                 args: args.map(r),
             },
-            Val::RFun {
-                a,
-                b,
-                squares,
-                union,
-            } => Step::RFun {
+            Val::Set { op, a, b, alpha } => Step::Set {
+                op,
                 out,
                 a: r(a),
                 b: r(b),
-                squares: squares.map(|(qa, qb)| (r(qa), r(qb))),
-                union,
+                alpha: r(alpha),
+            },
+            Val::SetImm { op, a, b, alpha } => Step::SetImm {
+                op,
+                out,
+                a: r(a),
+                b: r(b),
+                alpha,
             },
             Val::Input(_) | Val::Const(_) | Val::Param(_) => unreachable!("skipped above"),
         });
