@@ -8,6 +8,7 @@ mod hyperfun;
 mod mesh;
 mod slice;
 mod structures;
+mod threemf;
 mod to_fidget;
 
 /// Suite names and what they measure, for the usage message.
@@ -33,6 +34,10 @@ const SUITES: &[(&str, &str)] = &[
         "volume fractions achieved vs targets via the mf* HyperFun library, density-table cost",
     ),
     (
+        "3mf",
+        "beam-lattice, slice-stack and volumetric 3MF vs STL: file sizes, write times",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -55,6 +60,7 @@ fn main() {
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),
+        "3mf" => threemf::run(),
         "" => Err(usage()),
         other => Err(format!("unknown suite '{other}'\n{}", usage())),
     };

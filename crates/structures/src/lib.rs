@@ -12,6 +12,7 @@ pub mod lattice;
 pub mod porous;
 pub mod replicate;
 pub mod sampling;
+pub mod strut_graph;
 pub mod struts;
 pub mod surficial;
 pub mod tpms;

@@ -16,8 +16,11 @@ use microfrep_core::Expr;
 /// that reaches into it.
 pub const MAX_RADIUS: f64 = 0.3;
 
+/// The strut lattice families, each a periodic graph of bonds of one
+/// length between the nodes of a cubic cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StrutLattice {
+    /// Cube edges.
     SimpleCubic,
     /// Corners to the body centre.
     Bcc,
@@ -31,9 +34,11 @@ pub enum StrutLattice {
     Diamond,
 }
 
-type Q = [i32; 3];
+/// A lattice point in quarter-cell units.
+pub(crate) type Q = [i32; 3];
 
 impl StrutLattice {
+    /// Every family, in a fixed order.
     pub const ALL: [StrutLattice; 6] = [
         StrutLattice::SimpleCubic,
         StrutLattice::Bcc,
@@ -43,6 +48,7 @@ impl StrutLattice {
         StrutLattice::Diamond,
     ];
 
+    /// Short name (as used by the `mf*` HyperFun library and the CLI).
     pub fn name(self) -> &'static str {
         match self {
             StrutLattice::SimpleCubic => "simple-cubic",
@@ -55,7 +61,7 @@ impl StrutLattice {
     }
 
     /// Node basis (quarter units, in [0, 4)) and squared bond length.
-    fn basis(self) -> (Vec<Q>, i32) {
+    pub(crate) fn basis(self) -> (Vec<Q>, i32) {
         let fcc = vec![[0, 0, 0], [0, 2, 2], [2, 0, 2], [2, 2, 0]];
         match self {
             StrutLattice::SimpleCubic => (vec![[0, 0, 0]], 16),
@@ -112,10 +118,7 @@ impl StrutLattice {
         let mut out = Vec::new();
         for (n, a) in nodes.iter().enumerate() {
             for b in &nodes[n + 1..] {
-                let d2: i32 = (0..3).map(|i| (a[i] - b[i]).pow(2)).sum();
-                // Fcc keeps only bonds lying in a cell face plane.
-                let in_face = (0..3).any(|i| a[i] == b[i] && a[i].rem_euclid(4) == 0);
-                if d2 != len2 || (self == StrutLattice::Fcc && !in_face) {
+                if !self.is_bond(a, b, len2) {
                     continue;
                 }
                 let (pa, pb) = (a.map(|c| c as f64 / 4.0), b.map(|c| c as f64 / 4.0));
@@ -125,6 +128,44 @@ impl StrutLattice {
             }
         }
         out
+    }
+}
+
+impl StrutLattice {
+    /// Whether lattice nodes `a` and `b` (quarter units) are joined by a strut.
+    pub(crate) fn is_bond(self, a: &Q, b: &Q, len2: i32) -> bool {
+        let d2: i32 = (0..3).map(|i| (a[i] - b[i]).pow(2)).sum();
+        // Fcc keeps only bonds lying in a cell face plane.
+        let in_face = (0..3).any(|i| a[i] == b[i] && a[i].rem_euclid(4) == 0);
+        d2 == len2 && (self != StrutLattice::Fcc || in_face)
+    }
+
+    /// For each basis node, the offsets (quarter units) to the nodes it is
+    /// bonded to, in a fixed order.
+    pub(crate) fn bond_offsets(self) -> Vec<Vec<Q>> {
+        let (basis, len2) = self.basis();
+        let mut nodes = Vec::new();
+        for i in -1..=1 {
+            for j in -1..=1 {
+                for k in -1..=1 {
+                    nodes.extend(
+                        basis
+                            .iter()
+                            .map(|q| [q[0] + 4 * i, q[1] + 4 * j, q[2] + 4 * k]),
+                    );
+                }
+            }
+        }
+        basis
+            .iter()
+            .map(|a| {
+                nodes
+                    .iter()
+                    .filter(|b| self.is_bond(a, b, len2))
+                    .map(|b| [b[0] - a[0], b[1] - a[1], b[2] - a[2]])
+                    .collect()
+            })
+            .collect()
     }
 }
 
