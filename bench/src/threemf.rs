@@ -15,7 +15,7 @@ use microfrep_3mf::{
     lattices, read_from, write_to, Base, BaseMaterials, Mesh, MeshResolution, Model, Polygon,
     Transform, Unit, WriteOptions,
 };
-use microfrep_core::{Expr, Tape};
+use microfrep_core::{Expr, Shape};
 use microfrep_fab::{layer_polygons, rasterize, SliceGrid};
 use microfrep_mesh::check::volume_area;
 use microfrep_mesh::{Mesh as TriMesh, MeshOptions, Plan};
@@ -39,7 +39,7 @@ fn mesh(e: &Expr, lo: [f64; 3], hi: [f64; 3], voxel: f64) -> Result<TriMesh, Str
     let pad = 2.0 * voxel;
     let b = [lo.map(|v| v - pad), hi.map(|v| v + pad)];
     let n = ((b[1][0] - b[0][0]) / voxel).round() as usize;
-    Plan::new(e, &MeshOptions::new(b, n))
+    Plan::new(&Shape::from(e), &MeshOptions::new(b, n))
         .and_then(|p| p.run(&|_| {}))
         .map_err(|e| e.to_string())
 }
@@ -207,7 +207,7 @@ pub fn run() -> Result<(), String> {
     }
 
     // (b) Slice stack of the block, 0.05 mm layers, 0.025 mm pixels.
-    let tape = Tape::new(&from_file);
+    let tape = Shape::new(from_file.clone());
     let grid = SliceGrid::new(blo, bhi, 0.05, 0.025).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let layers: Vec<Vec<Polygon>> = (0..grid.layers)

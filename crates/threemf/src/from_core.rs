@@ -13,7 +13,7 @@
 use crate::implicit::{
     FunctionOutput, ImplicitFunction, ImplicitGraph, ImplicitNode, NodeInput, NodeValue, PortType,
 };
-use microfrep_core::{Axis, BinaryOp, Expr, Graph, Node, NodeId, UnaryOp};
+use microfrep_core::{Axis, BinaryOp, Expr, Graph, Node, NodeId, SetOp, UnaryOp};
 use std::collections::HashMap;
 
 /// How each core operation is written: `(core op, implicit nodes)`.
@@ -79,13 +79,7 @@ pub fn unsupported(g: &Graph, root: NodeId) -> Vec<Unsupported> {
 }
 
 fn children(n: Node) -> Vec<NodeId> {
-    match n {
-        Node::Var(_) | Node::Const(_) | Node::Param(_) => vec![],
-        Node::Unary(_, a) | Node::PowI(a, _) => vec![a],
-        Node::Binary(_, a, b) => vec![a, b],
-        Node::Select(c, a, b) => vec![c, a, b],
-        Node::Field { args, .. } => args.to_vec(),
-    }
+    n.children()
 }
 
 /// Node ids reachable from `root`, ascending (topological).
@@ -253,6 +247,20 @@ fn build(
                 let abs = b.un("abs", &s(c));
                 b.select(&zero, &abs, &s(x), &s(y))
             }
+            Node::Set { op, a, b: y, alpha } => set(&mut b, op, &s(a), &s(y), &s(alpha)),
+            Node::Blend { op, args } => {
+                let [a, y, alpha, a0, a1, a2] = args.map(s);
+                let v = set(&mut b, op, &a, &y, &alpha);
+                let one = b.konst(1.0);
+                let qa = b.bin("division", &a, &a1);
+                let qa = b.bin("multiplication", &qa, &qa);
+                let qb = b.bin("division", &y, &a2);
+                let qb = b.bin("multiplication", &qb, &qb);
+                let d = b.bin("addition", &one, &qa);
+                let d = b.bin("addition", &d, &qb);
+                let d = b.bin("division", &a0, &d);
+                b.bin("addition", &v, &d)
+            }
             Node::Field { .. } => unreachable!("fields were rejected above"),
         };
         src.insert(nid.0, out);
@@ -273,6 +281,27 @@ fn build(
             source: result,
         }],
     })
+}
+
+/// The R-function `(a + b ± sqrt(a² + b² - 2 alpha a b)) / (1 + alpha)`
+/// written with native nodes (the implicit extension has no set node).
+fn set(b: &mut Builder, op: SetOp, x: &str, y: &str, alpha: &str) -> String {
+    let (one, two) = (b.konst(1.0), b.konst(2.0));
+    let s = b.bin("addition", x, y);
+    let xx = b.bin("multiplication", x, x);
+    let yy = b.bin("multiplication", y, y);
+    let q = b.bin("addition", &xx, &yy);
+    let t = b.bin("multiplication", &two, alpha);
+    let t = b.bin("multiplication", &t, x);
+    let t = b.bin("multiplication", &t, y);
+    let q = b.bin("subtraction", &q, &t);
+    let r = b.un("sqrt", &q);
+    let v = match op {
+        SetOp::Union => b.bin("addition", &s, &r),
+        SetOp::Intersection => b.bin("subtraction", &s, &r),
+    };
+    let k = b.bin("addition", &one, alpha);
+    b.bin("division", &v, &k)
 }
 
 fn unary(b: &mut Builder, op: UnaryOp, a: &str) -> String {
