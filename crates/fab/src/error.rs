@@ -1,26 +1,34 @@
-use std::path::PathBuf;
+//! The error type of slicing, voxel export and reading back.
 
 /// Everything that can go wrong while slicing, exporting or reading back.
 #[derive(Debug, thiserror::Error)]
 pub enum FabError {
+    /// Bad parameters (no underlying error).
     #[error("invalid parameters: {0}")]
     Invalid(String),
-    // The I/O error is part of the message, not a source, so error chains
-    // do not print it twice.
-    #[error("{}: {err}", path.display())]
-    Io { path: PathBuf, err: std::io::Error },
-    #[error("{}: {msg}", path.display())]
-    Encode { path: PathBuf, msg: String },
+    /// Reading or writing a file failed, or the I/O layer refused (an
+    /// output that would replace an input, an existing output directory).
+    #[error(transparent)]
+    File(#[from] microfrep_io::IoError),
+    /// A file read back is malformed.
     #[error("line {line}: {msg}")]
-    Parse { line: usize, msg: String },
+    Parse {
+        /// Line, from 1.
+        line: usize,
+        /// What is wrong.
+        msg: String,
+    },
 }
 
+/// Results of this crate.
 pub type Result<T> = std::result::Result<T, FabError>;
 
 /// Attaches the path to an I/O error.
 pub(crate) fn io_at(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> FabError + '_ {
-    move |err| FabError::Io {
-        path: path.to_path_buf(),
-        err,
+    move |source| {
+        FabError::File(microfrep_io::IoError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 }

@@ -46,74 +46,37 @@ impl GreyImage {
     /// PNG bytes: bit depth 1 for binary images, 8 otherwise. `path` only
     /// names the file in errors.
     pub fn encode(&self, path: &Path) -> Result<Vec<u8>> {
-        let err = |e: png::EncodingError| FabError::Encode {
-            path: path.to_path_buf(),
-            msg: e.to_string(),
+        let img = microfrep_io::png::Image {
+            width: self.width,
+            height: self.height,
+            pixels: if self.binary {
+                microfrep_io::png::Pixels::Bilevel
+            } else {
+                microfrep_io::png::Pixels::Grey
+            },
+            data: self.pixels.clone(),
         };
-        let mut buf = Vec::new();
-        let mut enc = png::Encoder::new(&mut buf, self.width as u32, self.height as u32);
-        enc.set_color(png::ColorType::Grayscale);
-        let data = if self.binary {
-            enc.set_depth(png::BitDepth::One);
-            self.pack_bits()
-        } else {
-            enc.set_depth(png::BitDepth::Eight);
-            self.pixels.clone()
-        };
-        let mut w = enc.write_header().map_err(err)?;
-        w.write_image_data(&data).map_err(err)?;
-        w.finish().map_err(err)?;
-        Ok(buf)
-    }
-
-    /// Rows of 1-bit pixels, most significant bit first, each row padded to
-    /// a whole byte.
-    fn pack_bits(&self) -> Vec<u8> {
-        let stride = self.width.div_ceil(8);
-        let mut out = vec![0u8; stride * self.height];
-        for (r, row) in self.pixels.chunks(self.width).enumerate() {
-            for (i, &p) in row.iter().enumerate() {
-                if p >= 128 {
-                    out[r * stride + i / 8] |= 0x80 >> (i % 8);
-                }
-            }
-        }
-        out
+        Ok(microfrep_io::png::encode(&img, path)?)
     }
 }
 
 /// Decodes a greyscale PNG to one byte per pixel (1-bit images expanded to
 /// 0 / 255), top row first: for tests and tools that read the stack back.
 pub fn decode_png(path: &Path) -> Result<GreyImage> {
-    let file = std::fs::File::open(path).map_err(crate::error::io_at(path))?;
-    let err = |e: png::DecodingError| FabError::Encode {
-        path: path.to_path_buf(),
-        msg: e.to_string(),
-    };
-    let mut dec = png::Decoder::new(std::io::BufReader::new(file));
-    dec.set_transformations(png::Transformations::EXPAND);
-    let mut reader = dec.read_info().map_err(err)?;
-    let mut buf = vec![0u8; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).map_err(err)?;
-    if info.color_type != png::ColorType::Grayscale || info.bit_depth != png::BitDepth::Eight {
-        return Err(FabError::Encode {
-            path: path.to_path_buf(),
-            msg: format!(
-                "expected greyscale, got {:?} at {:?} bits",
-                info.color_type, info.bit_depth
-            ),
-        });
-    }
-    let (w, h) = (info.width as usize, info.height as usize);
-    let binary = reader.info().bit_depth == png::BitDepth::One;
-    let mut pixels = Vec::with_capacity(w * h);
-    for r in 0..h {
-        pixels.extend_from_slice(&buf[r * info.line_size..r * info.line_size + w]);
+    let bytes = std::fs::read(path).map_err(crate::error::io_at(path))?;
+    let binary = bytes.get(24) == Some(&1);
+    let img = microfrep_io::png::decode(&bytes, path)?;
+    if img.pixels != microfrep_io::png::Pixels::Grey {
+        return Err(FabError::Invalid(format!(
+            "{}: expected a greyscale PNG, got {:?}",
+            path.display(),
+            img.pixels
+        )));
     }
     Ok(GreyImage {
-        width: w,
-        height: h,
+        width: img.width,
+        height: img.height,
         binary,
-        pixels,
+        pixels: img.data,
     })
 }

@@ -6,7 +6,7 @@
 use crate::cli_format;
 use crate::contour::{contours, signed_area, Polygon};
 use crate::coverage::coverage;
-use crate::error::{io_at, FabError, Result};
+use crate::error::{io_at, Result};
 use crate::grid::SliceGrid;
 use crate::image::GreyImage;
 use crate::raster::{rasterize, LayerValues};
@@ -15,17 +15,20 @@ use crate::svg::layer_svg;
 use microfrep_core::Shape;
 use rayon::prelude::*;
 use std::fmt::Write as _;
-use std::fs;
 use std::io::Write as _;
 use std::path::Path;
 
 /// Contour simplification tolerance, in pixels.
 pub const SIMPLIFY_TOL_PIXELS: f64 = 0.25;
 
+/// The built-in stack formats.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Format {
     /// One PNG per layer: 1-bit, or 8-bit area coverage with `aa`.
-    Png { aa: bool },
+    Png {
+        /// 8-bit grey levels from each pixel's covered area.
+        aa: bool,
+    },
     /// One SVG of closed contours per layer.
     Svg,
     /// One Common Layer Interface file for all layers.
@@ -43,105 +46,127 @@ pub fn layer_polygons(shape: &Shape, grid: &SliceGrid, layer: &LayerValues) -> V
         .collect()
 }
 
-/// Slices the model into `out`: a directory of images or SVGs with a
-/// `manifest.json`, or one CLI file. `out` must not exist. `progress` is
-/// called once per finished layer.
-pub fn write_stack(
-    shape: &Shape,
-    grid: &SliceGrid,
-    format: Format,
-    out: &Path,
-    progress: &(dyn Fn() + Sync),
-) -> Result<()> {
-    if out.exists() {
-        return Err(FabError::Invalid(format!(
-            "{} already exists; remove it or choose another output",
-            out.display()
-        )));
+/// A layer-stack format: a directory with one file per layer and a
+/// manifest, or one file for all layers. The stack writer computes layers in
+/// parallel and hands each to the format; a new format (a 3MF slice stack,
+/// a material stack) is one more implementation.
+pub trait StackFormat: Sync {
+    /// Short name, as given to `--format`.
+    fn name(&self) -> &'static str;
+    /// Whether the output is one file (else a directory of layer files).
+    fn single_file(&self) -> bool;
+    /// The file name of layer `k` in a directory stack.
+    fn layer_name(&self, k: usize) -> String {
+        format!("layer_{k:05}.png")
     }
-    let name = out
-        .file_name()
-        .ok_or_else(|| FabError::Invalid(format!("{}: not a file name", out.display())))?;
-    let tmp = out.with_file_name(format!(
-        ".{}.partial-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let res = write_into(shape, grid, format, &tmp, progress);
-    let res = res.and_then(|_| fs::rename(&tmp, out).map_err(io_at(out)));
-    if res.is_err() {
-        // Best effort: the error being reported matters more than this one.
-        let _ = fs::remove_dir_all(&tmp).or_else(|_| fs::remove_file(&tmp));
+    /// Bytes before the first layer of a single-file stack.
+    fn header(&self, _grid: &SliceGrid) -> Vec<u8> {
+        Vec::new()
     }
-    res
+    /// The bytes of layer `k` (called in parallel for different layers).
+    fn layer(&self, shape: &Shape, grid: &SliceGrid, k: usize, path: &Path) -> Result<Vec<u8>>;
+    /// Bytes after the last layer of a single-file stack, or the manifest
+    /// of a directory stack.
+    fn footer(&self, grid: &SliceGrid) -> Vec<u8>;
 }
 
-fn write_into(
-    shape: &Shape,
-    grid: &SliceGrid,
-    format: Format,
-    tmp: &Path,
-    progress: &(dyn Fn() + Sync),
-) -> Result<()> {
-    let max = [
+impl StackFormat for Format {
+    fn name(&self) -> &'static str {
+        match self {
+            Format::Png { aa: false } => "png",
+            Format::Png { aa: true } => "png-aa",
+            Format::Svg => "svg",
+            Format::Cli => "cli",
+        }
+    }
+    fn single_file(&self) -> bool {
+        *self == Format::Cli
+    }
+    fn layer_name(&self, k: usize) -> String {
+        match self {
+            Format::Svg => format!("layer_{k:05}.svg"),
+            _ => format!("layer_{k:05}.png"),
+        }
+    }
+    fn header(&self, grid: &SliceGrid) -> Vec<u8> {
+        match self {
+            Format::Cli => cli_format::header(grid.min, top(grid), grid.layers).into_bytes(),
+            _ => Vec::new(),
+        }
+    }
+    fn layer(&self, shape: &Shape, grid: &SliceGrid, k: usize, path: &Path) -> Result<Vec<u8>> {
+        layer_payload(shape, grid, *self, k, top(grid), path)
+    }
+    fn footer(&self, grid: &SliceGrid) -> Vec<u8> {
+        match self {
+            Format::Cli => cli_format::FOOTER.as_bytes().to_vec(),
+            f => manifest(grid, *f, &|k| f.layer_name(k)).into_bytes(),
+        }
+    }
+}
+
+/// The far corner of the sliced box.
+fn top(grid: &SliceGrid) -> [f64; 3] {
+    [
         grid.min[0] + grid.nx as f64 * grid.pixel,
         grid.min[1] + grid.ny as f64 * grid.pixel,
         grid.min[2] + grid.layers as f64 * grid.layer,
-    ];
-    let mut cli = None;
-    match format {
-        Format::Cli => {
-            let f = fs::File::create(tmp).map_err(io_at(tmp))?;
-            let mut w = std::io::BufWriter::new(f);
-            w.write_all(cli_format::header(grid.min, max, grid.layers).as_bytes())
-                .map_err(io_at(tmp))?;
-            cli = Some(w);
-        }
-        _ => fs::create_dir(tmp).map_err(io_at(tmp))?,
+    ]
+}
+
+/// Slices the model into `out`: a directory of images or SVGs with a
+/// `manifest.json`, or one file (CLI). A directory output must not exist.
+/// The stack is written under a temporary name next to `out` and renamed
+/// only when complete ([`microfrep_io::atomic`]); `progress` is called once
+/// per finished layer.
+pub fn write_stack(
+    shape: &Shape,
+    grid: &SliceGrid,
+    format: &dyn StackFormat,
+    out: &Path,
+    progress: &(dyn Fn() + Sync),
+) -> Result<()> {
+    use microfrep_io::{AtomicDir, AtomicFile};
+    enum Target {
+        File(AtomicFile),
+        Dir(AtomicDir),
     }
-    let file_name = |k: usize| match format {
-        Format::Svg => format!("layer_{k:05}.svg"),
-        _ => format!("layer_{k:05}.png"),
+    let mut target = if format.single_file() {
+        let mut f = AtomicFile::create(out)?;
+        let head = format.header(grid);
+        f.write_all(&head).map_err(io_at(out))?;
+        Target::File(f)
+    } else {
+        Target::Dir(AtomicDir::create(out)?)
     };
     let batch = 2 * rayon::current_num_threads();
     for start in (0..grid.layers).step_by(batch) {
         let end = (start + batch).min(grid.layers);
         let payloads: Vec<Result<Vec<u8>>> = (start..end)
             .into_par_iter()
-            .map(|k| {
-                let path = tmp.join(file_name(k));
-                layer_payload(shape, grid, format, k, max, &path)
-            })
+            .map(|k| format.layer(shape, grid, k, &out.join(format.layer_name(k))))
             .collect();
         for (k, p) in (start..end).zip(payloads) {
             let bytes = p?;
-            match cli.as_mut() {
-                Some(w) => w.write_all(&bytes).map_err(io_at(tmp))?,
-                None => {
-                    let path = tmp.join(file_name(k));
-                    fs::write(&path, bytes).map_err(io_at(&path))?;
-                }
+            match &mut target {
+                Target::File(f) => f.write_all(&bytes).map_err(io_at(out))?,
+                Target::Dir(d) => d.write(&format.layer_name(k), &bytes)?,
             }
             progress();
         }
     }
-    match cli {
-        Some(mut w) => {
-            w.write_all(cli_format::FOOTER.as_bytes())
-                .map_err(io_at(tmp))?;
-            w.into_inner()
-                .map_err(|e| FabError::Io {
-                    path: tmp.to_path_buf(),
-                    err: e.into_error(),
-                })?
-                .sync_all()
-                .map_err(io_at(tmp))
+    let tail = format.footer(grid);
+    match target {
+        Target::File(mut f) => {
+            f.write_all(&tail).map_err(io_at(out))?;
+            f.commit()?;
         }
-        None => {
-            let path = tmp.join("manifest.json");
-            fs::write(&path, manifest(grid, format, &file_name)).map_err(io_at(&path))
+        Target::Dir(d) => {
+            d.write("manifest.json", &tail)?;
+            d.commit()?;
         }
     }
+    Ok(())
 }
 
 /// The bytes one layer contributes: a PNG, an SVG or a CLI layer block.

@@ -5,9 +5,9 @@
 
 use crate::error::{io_at, FabError, Result};
 use microfrep_core::{eval_grid_par, Shape};
-use std::fs;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use microfrep_io::AtomicFile;
+use std::io::Write;
+use std::path::Path;
 
 /// Limit on the voxel count, so a typo in the size is an error, not a
 /// disk-filling run.
@@ -78,30 +78,22 @@ impl VoxelGrid {
 
 /// Samples the model on `grid` and writes `out` (format from its
 /// extension); `.raw` gets a `.json` sidecar next to it. With `field` the
-/// values are f32, else occupancy bytes. Output appears only when complete.
+/// values are f32, else occupancy bytes. The files appear only when both
+/// are complete (atomic outputs, committed together).
 pub fn write_voxels(shape: &Shape, grid: &VoxelGrid, field: bool, out: &Path) -> Result<()> {
     let format = VoxelFormat::from_path(out)?;
-    let tmp = partial(out);
-    let res = write_into(shape, grid, field, format, &tmp);
-    let res = res.and_then(|_| fs::rename(&tmp, out).map_err(io_at(out)));
-    if res.is_err() {
-        let _ = fs::remove_file(&tmp);
-        return res;
-    }
+    let mut f = AtomicFile::create(out)?;
+    write_into(shape, grid, field, format, &mut f).map_err(io_at(out))?;
     if format == VoxelFormat::Raw {
         let side = out.with_extension("json");
-        fs::write(&side, sidecar(grid, field)).map_err(io_at(&side))?;
+        let mut s = AtomicFile::create(&side)?;
+        s.write_all(sidecar(grid, field).as_bytes())
+            .map_err(io_at(&side))?;
+        microfrep_io::atomic::commit_all(vec![f, s])?;
+    } else {
+        f.commit()?;
     }
     Ok(())
-}
-
-fn partial(out: &Path) -> PathBuf {
-    let name = out.file_name().map(|n| n.to_string_lossy().into_owned());
-    out.with_file_name(format!(
-        ".{}.partial-{}",
-        name.unwrap_or_default(),
-        std::process::id()
-    ))
 }
 
 fn write_into(
@@ -109,10 +101,8 @@ fn write_into(
     g: &VoxelGrid,
     field: bool,
     format: VoxelFormat,
-    tmp: &Path,
-) -> Result<()> {
-    let f = fs::File::create(tmp).map_err(io_at(tmp))?;
-    let mut w = BufWriter::new(f);
+    w: &mut AtomicFile,
+) -> std::io::Result<()> {
     let [nx, ny, nz] = g.dims;
     let [ox, oy, oz] = g.origin;
     let s = g.spacing;
@@ -136,7 +126,7 @@ fn write_into(
             }
         ),
     };
-    w.write_all(header.as_bytes()).map_err(io_at(tmp))?;
+    w.write_all(header.as_bytes())?;
     let mut bytes = Vec::new();
     for k in 0..nz {
         let vals = eval_grid_par(
@@ -159,18 +149,12 @@ fn write_into(
         } else {
             bytes.extend(vals.iter().map(|&v| (v >= 0.0) as u8));
         }
-        w.write_all(&bytes).map_err(io_at(tmp))?;
+        w.write_all(&bytes)?;
     }
     if format == VoxelFormat::Vtk {
-        w.write_all(b"\n").map_err(io_at(tmp))?;
+        w.write_all(b"\n")?;
     }
-    w.into_inner()
-        .map_err(|e| FabError::Io {
-            path: tmp.to_path_buf(),
-            err: e.into_error(),
-        })?
-        .sync_all()
-        .map_err(io_at(tmp))
+    Ok(())
 }
 
 fn sidecar(g: &VoxelGrid, field: bool) -> String {

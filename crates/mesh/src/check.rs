@@ -71,6 +71,121 @@ pub fn volume_area(mesh: &Mesh) -> (f64, f64) {
         .fold((0.0, 0.0), |(v, a), (dv, da)| (v + dv, a + da))
 }
 
+/// What a mesher's summary reports: counts, bad edges, Euler
+/// characteristic, volume, area and bounding box, in time linear in the
+/// mesh (no sorting), in parallel. Each vertex checks the edges to its
+/// higher-numbered neighbours from its own triangle fan: an edge is good
+/// when it is used once in each direction. Duplicate triangles show as bad
+/// edges; coincident vertices and degenerate triangles are not looked for
+/// (the mesher makes neither by construction; [`check`] counts them).
+pub fn summary(mesh: &Mesh) -> CheckReport {
+    let nv = mesh.vertices.len();
+    let (volume, area) = volume_area(mesh);
+    // Triangle fans by counting sort: offsets, then incident corners
+    // packed as triangle * 4 + corner.
+    let mut start = vec![0u32; nv + 1];
+    for t in &mesh.triangles {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for i in 0..nv {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut inc = vec![0u64; 3 * mesh.triangles.len()];
+    for (ti, t) in mesh.triangles.iter().enumerate() {
+        for (k, &v) in t.iter().enumerate() {
+            let s = &mut fill[v as usize];
+            inc[*s as usize] = (ti as u64) << 2 | k as u64;
+            *s += 1;
+        }
+    }
+    drop(fill);
+    let (edges, bad_edges) = (0..nv)
+        .into_par_iter()
+        .with_min_len(4096)
+        .fold(
+            || (0usize, 0usize, Vec::<(u32, i8)>::new()),
+            |(mut e, mut b, mut nb), v| {
+                nb.clear();
+                for &c in &inc[start[v] as usize..start[v + 1] as usize] {
+                    let t = mesh.triangles[(c >> 2) as usize];
+                    let k = (c & 3) as usize;
+                    // v -> next is outgoing, prev -> v incoming.
+                    nb.push((t[(k + 1) % 3], 1));
+                    nb.push((t[(k + 2) % 3], -1));
+                }
+                nb.sort_unstable();
+                let mut i = 0;
+                while i < nb.len() {
+                    let w = nb[i].0;
+                    let mut j = i;
+                    let (mut outs, mut ins) = (0, 0);
+                    while j < nb.len() && nb[j].0 == w {
+                        if nb[j].1 > 0 {
+                            outs += 1;
+                        } else {
+                            ins += 1;
+                        }
+                        j += 1;
+                    }
+                    if w as usize > v {
+                        e += 1;
+                        if outs != 1 || ins != 1 {
+                            b += 1;
+                        }
+                    } else if w as usize == v {
+                        // A triangle with a repeated corner.
+                        e += 1;
+                        b += 1;
+                    }
+                    i = j;
+                }
+                (e, b, nb)
+            },
+        )
+        .map(|(e, b, _)| (e, b))
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let bbox = mesh
+        .vertices
+        .par_chunks(1 << 16)
+        .map(|ch| {
+            let mut bb = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+            for p in ch {
+                for a in 0..3 {
+                    bb[0][a] = bb[0][a].min(p[a] as f64);
+                    bb[1][a] = bb[1][a].max(p[a] as f64);
+                }
+            }
+            bb
+        })
+        .reduce(
+            || [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]],
+            |a, b| {
+                [
+                    std::array::from_fn(|k| a[0][k].min(b[0][k])),
+                    std::array::from_fn(|k| a[1][k].max(b[1][k])),
+                ]
+            },
+        );
+    CheckReport {
+        vertices: nv,
+        triangles: mesh.triangles.len(),
+        edges,
+        bad_edges,
+        degenerate: 0,
+        duplicate_triangles: 0,
+        duplicate_vertices: 0,
+        euler: nv as i64 - edges as i64 + mesh.triangles.len() as i64,
+        volume,
+        area,
+        bbox,
+    }
+}
+
+/// The full check: [`summary`]'s figures plus degenerate and duplicate
+/// triangles and coincident vertices (sorting; for tests and audits).
 pub fn check(mesh: &Mesh) -> CheckReport {
     let nv = mesh.vertices.len();
     let (volume, area) = volume_area(mesh);
@@ -190,6 +305,28 @@ mod tests {
         assert!((r.volume - 1.0 / 6.0).abs() < 1e-12);
         let area = 1.5 + 3f64.sqrt() / 2.0;
         assert!((r.area - area).abs() < 1e-6);
+    }
+
+    #[test]
+    fn summary_agrees_with_the_full_check() {
+        let mut meshes = vec![tetra()];
+        let mut m = tetra();
+        m.triangles[3] = [1, 3, 2];
+        meshes.push(m);
+        let mut m = tetra();
+        m.triangles.pop();
+        meshes.push(m);
+        let mut m = tetra();
+        m.triangles.push([3, 2, 1]);
+        meshes.push(m);
+        for m in &meshes {
+            let (s, c) = (summary(m), check(m));
+            assert_eq!(
+                (s.edges, s.bad_edges, s.euler, s.volume, s.area, s.bbox),
+                (c.edges, c.bad_edges, c.euler, c.volume, c.area, c.bbox),
+                "{m:?}"
+            );
+        }
     }
 
     #[test]

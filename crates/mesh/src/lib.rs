@@ -30,6 +30,7 @@ mod classify;
 pub mod correct;
 pub mod cubes;
 mod grid;
+pub mod job;
 pub mod memory;
 mod pipeline;
 mod refine;
@@ -44,17 +45,32 @@ use rayon::prelude::*;
 
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
+    /// A bad option or model for meshing (no underlying error).
     #[error("{0}")]
     Input(String),
+    /// The job would not fit in memory.
     #[error("{0}")]
     TooLarge(String),
+    /// A broken invariant of the mesher (a bug).
     #[error("internal meshing error: {0}")]
     Internal(String),
+    /// Writing the output failed.
     #[error("cannot write {path}")]
     Io {
+        /// The output.
         path: String,
+        /// The underlying error.
+        #[source]
         source: std::io::Error,
     },
+    /// The I/O layer refused or failed (input protection, unknown format,
+    /// temporaries).
+    #[error(transparent)]
+    File(#[from] microfrep_io::IoError),
+    /// A write inside a mesh sink failed (reported with the path by the
+    /// caller that knows it).
+    #[error("writing the mesh")]
+    Stream(#[source] std::io::Error),
 }
 
 /// An indexed triangle mesh; triangles are counter-clockwise seen from

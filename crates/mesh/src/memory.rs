@@ -89,29 +89,6 @@ fn scratch_bytes(plan: &Plan) -> f64 {
     rayon::current_num_threads() as f64 * (plan.grid.brick as f64 + 1.0).powi(3) * 42.0
 }
 
-/// `MemAvailable` from /proc/meminfo in bytes, if readable.
-pub fn available() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
-    kib_field(&s, "MemAvailable:")
-}
-
-/// Peak resident memory of this process (`VmHWM`) in bytes, if readable.
-pub fn peak_rss() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    kib_field(&s, "VmHWM:")
-}
-
-fn kib_field(s: &str, name: &str) -> Option<f64> {
-    let line = s.lines().find(|l| l.starts_with(name))?;
-    let kib: f64 = line[name.len()..]
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kib * 1024.0)
-}
-
 /// The largest resolution whose estimate fits `budget` bytes, given the
 /// estimate `e` at resolution `n` (output size scales with n^2).
 pub fn resolution_fitting(e: &Estimate, n: usize, budget: f64) -> usize {
@@ -126,13 +103,6 @@ pub fn resolution_fitting(e: &Estimate, n: usize, budget: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn parses_kib_fields() {
-        let s = "MemTotal: 100 kB\nMemAvailable:    2048 kB\n";
-        assert_eq!(kib_field(s, "MemAvailable:"), Some(2048.0 * 1024.0));
-        assert_eq!(kib_field(s, "VmHWM:"), None);
-    }
 
     #[test]
     fn fitting_resolution_scales_with_square_root() {

@@ -1,6 +1,6 @@
 //! 8-bit RGB images and their PNG encoding.
 
-use crate::error::{RenderError, Result};
+use crate::error::Result;
 use std::path::Path;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -17,37 +17,27 @@ impl RgbImage {
         [self.data[k], self.data[k + 1], self.data[k + 2]]
     }
 
-    pub fn encode_png(&self) -> std::result::Result<Vec<u8>, png::EncodingError> {
-        let mut buf = Vec::new();
-        let mut enc = png::Encoder::new(&mut buf, self.width as u32, self.height as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc.write_header()?;
-        w.write_image_data(&self.data)?;
-        w.finish()?;
-        Ok(buf)
+    /// PNG bytes of the image.
+    pub fn encode_png(&self) -> Result<Vec<u8>> {
+        Ok(microfrep_io::png::encode(
+            &self.as_png(),
+            std::path::Path::new("image"),
+        )?)
     }
 
-    /// Writes the PNG through a temporary file renamed when complete.
-    pub fn save_png(&self, path: &Path) -> Result<()> {
-        let err = |msg: String| RenderError::Write {
-            path: path.to_path_buf(),
-            msg,
-        };
-        let bytes = self.encode_png().map_err(|e| err(e.to_string()))?;
-        let name = path
-            .file_name()
-            .ok_or_else(|| err("not a file name".into()))?;
-        let tmp = path.with_file_name(format!(
-            ".{}.partial-{}",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
-        let res = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
-        if let Err(e) = res {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(err(e.to_string()));
+    fn as_png(&self) -> microfrep_io::png::Image {
+        microfrep_io::png::Image {
+            width: self.width,
+            height: self.height,
+            pixels: microfrep_io::png::Pixels::Rgb,
+            data: self.data.clone(),
         }
+    }
+
+    /// Writes the PNG atomically (a temporary renamed when complete).
+    pub fn save_png(&self, path: &Path) -> Result<()> {
+        let bytes = microfrep_io::png::encode(&self.as_png(), path)?;
+        microfrep_io::atomic::write_file(path, &bytes)?;
         Ok(())
     }
 }

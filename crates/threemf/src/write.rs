@@ -47,16 +47,24 @@ impl Default for WriteOptions {
     }
 }
 
-/// Writes `model` to the file `path` (created or truncated).
+/// Writes `model` to the file `path` atomically: a temporary next to it,
+/// renamed when complete (see `microfrep_io::atomic`); on an error nothing
+/// is left behind.
 pub fn write_file(path: impl AsRef<Path>, model: &Model, opts: &WriteOptions) -> Result<()> {
     let path = path.as_ref();
-    let io = |source| Error::Io {
-        path: path.display().to_string(),
-        source,
+    let io = |e: microfrep_io::IoError| match e {
+        microfrep_io::IoError::Io { source, .. } => Error::Io {
+            path: path.display().to_string(),
+            source,
+        },
+        other => Error::Io {
+            path: path.display().to_string(),
+            source: std::io::Error::other(other),
+        },
     };
-    let f = std::fs::File::create(path).map_err(io)?;
-    let f = write_to(f, model, opts)?;
-    f.sync_all().map_err(io)
+    let mut f = microfrep_io::AtomicFile::create(path).map_err(io)?;
+    write_to(&mut f, model, opts)?;
+    f.commit().map_err(io)
 }
 
 /// Writes `model` as a package into `w` and gives `w` back.

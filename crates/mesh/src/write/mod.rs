@@ -1,5 +1,8 @@
-//! Mesh writers: binary STL, OBJ, binary PLY and 3MF, written to a temporary
-//! file next to the target and renamed into place only on success.
+//! Mesh writers behind one trait, [`MeshFormat`], chosen by extension from
+//! [`formats`]: binary STL, OBJ, binary PLY and 3MF. Every file goes through
+//! [`microfrep_io::AtomicFile`] (a unique temporary next to the target,
+//! renamed on success, removed on error or interruption), and the bytes of
+//! large meshes are encoded in parallel chunks and written in large blocks.
 
 mod obj;
 mod ply;
@@ -8,100 +11,89 @@ mod stream;
 mod threemf;
 
 pub use stl::StlWriter;
-pub use stream::{stream_mesh, stream_temp_paths};
+pub use stream::stream_mesh;
 
 use crate::{Mesh, MeshError};
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use microfrep_io::{AtomicFile, FormatRegistry, OutputFormat};
+use rayon::prelude::*;
+use std::io::Write;
+use std::path::Path;
+use std::sync::OnceLock;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    Stl,
-    Obj,
-    Ply,
-    ThreeMf,
+/// A mesh file format.
+pub trait MeshFormat: OutputFormat {
+    /// Whether the format stores vertex normals (then they are computed
+    /// from the model's gradient and passed to [`MeshFormat::write`]).
+    fn wants_normals(&self) -> bool {
+        false
+    }
+    /// Whether [`stream_mesh`] can write it while meshing.
+    fn streams(&self) -> bool {
+        false
+    }
+    /// Writes the whole mesh to `out`.
+    fn write(
+        &self,
+        mesh: &Mesh,
+        normals: Option<&[[f32; 3]]>,
+        out: &mut AtomicFile,
+    ) -> std::io::Result<()>;
 }
 
-impl Format {
-    /// The format named by the file extension.
-    pub fn from_path(p: &Path) -> Result<Format, MeshError> {
-        let ext = p
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
-        match ext.as_deref() {
-            Some("stl") => Ok(Format::Stl),
-            Some("obj") => Ok(Format::Obj),
-            Some("ply") => Ok(Format::Ply),
-            Some("3mf") => Ok(Format::ThreeMf),
-            _ => Err(MeshError::Input(format!(
-                "{}: unknown mesh format (use .stl, .obj, .ply or .3mf)",
-                p.display()
-            ))),
-        }
-    }
-
-    /// Whether the format stores vertex normals.
-    pub fn wants_normals(self) -> bool {
-        matches!(self, Format::Obj | Format::Ply)
-    }
+/// The mesh formats, by extension.
+pub fn formats() -> &'static FormatRegistry<dyn MeshFormat> {
+    static R: OnceLock<FormatRegistry<dyn MeshFormat>> = OnceLock::new();
+    R.get_or_init(|| {
+        let mut r: FormatRegistry<dyn MeshFormat> = FormatRegistry::new("mesh");
+        r.register(Box::new(stl::Stl));
+        r.register(Box::new(obj::Obj));
+        r.register(Box::new(ply::Ply));
+        r.register(Box::new(threemf::ThreeMf));
+        r
+    })
 }
 
-/// The temporary name `out` is written under before the rename (hidden, in
-/// the same directory so the rename is atomic).
-pub fn temp_path(out: &Path) -> PathBuf {
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    out.with_file_name(format!(".{name}.part"))
+/// The format of `path` by its extension.
+pub fn format_of(path: &Path) -> Result<&'static dyn MeshFormat, MeshError> {
+    formats().for_path(path).map_err(MeshError::from)
 }
 
-/// Writes `mesh` to `out` in `format`; `normals` (one per vertex) are used
-/// by the formats that store them. On error nothing is left behind.
-pub fn write_mesh(
-    out: &Path,
-    format: Format,
-    mesh: &Mesh,
-    normals: Option<&[[f32; 3]]>,
-) -> Result<(), MeshError> {
-    let tmp = temp_path(out);
-    let io = |source| MeshError::Io {
-        path: out.display().to_string(),
-        source,
-    };
-    let res = (|| -> std::io::Result<()> {
-        let file = File::create(&tmp)?;
-        match format {
-            Format::Stl => {
-                let mut w = StlWriter::new(BufWriter::new(file))?;
-                for t in &mesh.triangles {
-                    w.push(t.map(|i| mesh.vertices[i as usize]))?;
-                }
-                w.finish()?
-                    .into_inner()
-                    .map_err(|e| e.into_error())?
-                    .sync_all()
-            }
-            Format::ThreeMf => threemf::write(file, mesh).and_then(|f| f.sync_all()),
-            Format::Obj | Format::Ply => {
-                let mut w = BufWriter::new(file);
-                if format == Format::Obj {
-                    obj::write(&mut w, mesh, normals)?;
-                } else {
-                    ply::write(&mut w, mesh, normals)?;
-                }
-                w.flush()?;
-                w.into_inner().map_err(|e| e.into_error())?.sync_all()
-            }
-        }
-    })();
-    match res.and_then(|_| std::fs::rename(&tmp, out)) {
-        Ok(()) => Ok(()),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(io(e))
+/// Writes `mesh` to `out` in the format its extension names; `normals`
+/// (one per vertex) are used by the formats that store them. On error
+/// nothing is left behind.
+pub fn write_mesh(out: &Path, mesh: &Mesh, normals: Option<&[[f32; 3]]>) -> Result<(), MeshError> {
+    let format = format_of(out)?;
+    let mut f = AtomicFile::create(out)?;
+    format
+        .write(mesh, normals, &mut f)
+        .map_err(|e| MeshError::from(f.err(e)))?;
+    f.commit()?;
+    Ok(())
+}
+
+/// Items per parallel encoding chunk.
+const CHUNK: usize = 1 << 16;
+
+/// Encodes `items` in parallel chunks with `enc` and writes the chunks in
+/// order, a few at a time so memory stays bounded.
+pub(crate) fn write_encoded<T: Sync>(
+    w: &mut impl Write,
+    items: &[T],
+    enc: impl Fn(&[T], &mut Vec<u8>) + Sync,
+) -> std::io::Result<()> {
+    let group = CHUNK * 4 * rayon::current_num_threads().max(1);
+    for g in items.chunks(group) {
+        let bufs: Vec<Vec<u8>> = g
+            .par_chunks(CHUNK)
+            .map(|c| {
+                let mut b = Vec::new();
+                enc(c, &mut b);
+                b
+            })
+            .collect();
+        for b in bufs {
+            w.write_all(&b)?;
         }
     }
+    Ok(())
 }

@@ -1,7 +1,49 @@
 //! Binary little-endian PLY with optional vertex normals.
 
+use super::{write_encoded, MeshFormat};
 use crate::Mesh;
+use microfrep_io::{AtomicFile, OutputFormat};
 use std::io::Write;
+
+pub(super) struct Ply;
+
+impl OutputFormat for Ply {
+    fn name(&self) -> &'static str {
+        "binary PLY"
+    }
+    fn extensions(&self) -> &'static [&'static str] {
+        &["ply"]
+    }
+}
+
+impl MeshFormat for Ply {
+    fn wants_normals(&self) -> bool {
+        true
+    }
+    fn streams(&self) -> bool {
+        true
+    }
+    fn write(
+        &self,
+        mesh: &Mesh,
+        normals: Option<&[[f32; 3]]>,
+        out: &mut AtomicFile,
+    ) -> std::io::Result<()> {
+        let (nv, nf) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
+        out.write_all(header(nv, nf, normals.is_some()).as_bytes())?;
+        let idx: Vec<usize> = (0..mesh.vertices.len()).collect();
+        write_encoded(out, &idx, |is, b| {
+            for &i in is {
+                vertex(b, mesh.vertices[i], normals.map(|ns| ns[i]));
+            }
+        })?;
+        write_encoded(out, &mesh.triangles, |ts, b| {
+            for t in ts {
+                face(b, *t);
+            }
+        })
+    }
+}
 
 /// The header for `nv` vertices and `nf` triangles.
 pub fn header(nv: u64, nf: u64, normals: bool) -> String {
@@ -19,31 +61,16 @@ pub fn header(nv: u64, nf: u64, normals: bool) -> String {
 }
 
 /// One vertex record: position, then the normal if any.
-pub fn vertex(w: &mut impl Write, p: [f32; 3], n: Option<[f32; 3]>) -> std::io::Result<()> {
-    let mut rec = [0u8; 24];
-    for (k, c) in p.iter().chain(n.iter().flatten()).enumerate() {
-        rec[4 * k..4 * k + 4].copy_from_slice(&c.to_le_bytes());
+pub fn vertex(b: &mut Vec<u8>, p: [f32; 3], n: Option<[f32; 3]>) {
+    for c in p.iter().chain(n.iter().flatten()) {
+        b.extend_from_slice(&c.to_le_bytes());
     }
-    w.write_all(&rec[..if n.is_some() { 24 } else { 12 }])
 }
 
 /// One face record: a count of 3 and the indices.
-pub fn face(w: &mut impl Write, t: [u32; 3]) -> std::io::Result<()> {
-    let mut rec = [3u8; 13];
-    for (k, i) in t.iter().enumerate() {
-        rec[1 + 4 * k..5 + 4 * k].copy_from_slice(&i.to_le_bytes());
+pub fn face(b: &mut Vec<u8>, t: [u32; 3]) {
+    b.push(3);
+    for i in t {
+        b.extend_from_slice(&i.to_le_bytes());
     }
-    w.write_all(&rec)
-}
-
-pub fn write(w: &mut impl Write, mesh: &Mesh, normals: Option<&[[f32; 3]]>) -> std::io::Result<()> {
-    let (nv, nf) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
-    w.write_all(header(nv, nf, normals.is_some()).as_bytes())?;
-    for (i, p) in mesh.vertices.iter().enumerate() {
-        vertex(w, *p, normals.map(|ns| ns[i]))?;
-    }
-    for t in &mesh.triangles {
-        face(w, *t)?;
-    }
-    Ok(())
 }

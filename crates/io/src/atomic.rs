@@ -1,0 +1,429 @@
+//! Outputs that appear whole or not at all.
+//!
+//! An [`AtomicFile`] or [`AtomicDir`] is written under a temporary name in
+//! the target's directory (`.microfrep-PID-N.partial`: short, so a target
+//! name of any allowed length works, and unique per process and output, so
+//! two runs writing the same target never share a temporary) and renamed
+//! onto the target by `commit`, which on POSIX file systems replaces it in
+//! one step. Until then the temporary is listed in a process-wide registry:
+//! dropping the writer, or [`cleanup_all`] (which the CLI calls from its
+//! Ctrl-C and SIGTERM handler), removes it. Two runs writing one target at
+//! the same time each rename their own complete file, so the target is
+//! always one of the files a run reported.
+//!
+//! Inputs are protected: paths given to [`register_input`] (the model, a
+//! mesh, a scan) cannot be the target of an output of the same run.
+
+use crate::{IoError, Result};
+use std::fs::{self, File};
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+/// Temporaries being written: (owner id, path, is a directory).
+static LIVE: Mutex<Vec<(u64, PathBuf, bool)>> = Mutex::new(Vec::new());
+/// Canonical paths of this run's inputs.
+static INPUTS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+static SEQ: AtomicU64 = AtomicU64::new(1);
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Buffer of [`AtomicFile`]: large writes keep system calls rare.
+const BUFFER: usize = 4 << 20;
+
+/// Declares `path` an input of this run: no output may replace it.
+pub fn register_input(path: &Path) {
+    if let Ok(c) = fs::canonicalize(path) {
+        lock(&INPUTS).push(c);
+    }
+}
+
+/// Removes every temporary still being written (for a signal handler: the
+/// process is about to exit). Safe to call at any time.
+pub fn cleanup_all() {
+    let live = std::mem::take(&mut *lock(&LIVE));
+    for (_, p, dir) in live {
+        let _ = if dir {
+            fs::remove_dir_all(&p)
+        } else {
+            fs::remove_file(&p)
+        };
+    }
+}
+
+/// Number of temporaries currently registered (for tests).
+pub fn live_temporaries() -> usize {
+    lock(&LIVE).len()
+}
+
+/// The canonical form of a path that may not exist yet: its parent
+/// canonicalised, plus its file name.
+fn canonical_target(target: &Path) -> Option<PathBuf> {
+    if let Ok(c) = fs::canonicalize(target) {
+        return Some(c);
+    }
+    let parent = match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(fs::canonicalize(parent).ok()?.join(target.file_name()?))
+}
+
+/// Refuses a target that is one of the registered inputs.
+pub fn check_not_input(target: &Path) -> Result<()> {
+    if let Some(c) = canonical_target(target) {
+        if lock(&INPUTS).iter().any(|i| *i == c) {
+            return Err(IoError::WouldOverwriteInput {
+                path: target.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A fresh temporary path in `target`'s directory, registered under `id`.
+fn temp_for(target: &Path, id: u64, n: u64, dir: bool) -> Result<PathBuf> {
+    if target.file_name().is_none() {
+        return Err(IoError::NotAFileName {
+            path: target.to_path_buf(),
+        });
+    }
+    let parent = match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let t = parent.join(format!(
+        ".microfrep-{}-{id}-{n}.partial",
+        std::process::id()
+    ));
+    lock(&LIVE).push((id, t.clone(), dir));
+    Ok(t)
+}
+
+fn unregister(id: u64) -> Vec<(PathBuf, bool)> {
+    let mut live = lock(&LIVE);
+    let (mine, rest): (Vec<_>, Vec<_>) = live.drain(..).partition(|(i, _, _)| *i == id);
+    *live = rest;
+    mine.into_iter().map(|(_, p, d)| (p, d)).collect()
+}
+
+fn remove_all(paths: &[(PathBuf, bool)]) {
+    for (p, dir) in paths {
+        let _ = if *dir {
+            fs::remove_dir_all(p)
+        } else {
+            fs::remove_file(p)
+        };
+    }
+}
+
+/// A file written under a temporary name and renamed onto its target by
+/// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind.
+/// Writes go through a 4 MiB buffer.
+pub struct AtomicFile {
+    target: PathBuf,
+    temp: PathBuf,
+    file: Option<BufWriter<File>>,
+    id: u64,
+    scratch: u64,
+}
+
+impl AtomicFile {
+    /// Starts writing `target` (which is not touched until `commit`).
+    pub fn create(target: &Path) -> Result<AtomicFile> {
+        check_not_input(target)?;
+        let id = SEQ.fetch_add(1, Ordering::Relaxed);
+        let temp = temp_for(target, id, 0, false)?;
+        let file = fs::OpenOptions::new()
+            .write(true)
+            .read(true)
+            .create_new(true)
+            .open(&temp);
+        let file = match file {
+            Ok(f) => f,
+            Err(e) => {
+                unregister(id);
+                return Err(IoError::Io {
+                    path: target.to_path_buf(),
+                    source: e,
+                });
+            }
+        };
+        Ok(AtomicFile {
+            target: target.to_path_buf(),
+            temp,
+            file: Some(BufWriter::with_capacity(BUFFER, file)),
+            id,
+            scratch: 0,
+        })
+    }
+
+    /// The target this file becomes.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// A scratch file next to the temporary (for formats assembled from
+    /// parts), removed with it; the caller creates and writes it.
+    pub fn scratch_path(&mut self) -> PathBuf {
+        self.scratch += 1;
+        // `temp_for` only fails on a target without a file name, which
+        // `create` has already excluded.
+        temp_for(&self.target, self.id, self.scratch, false)
+            .unwrap_or_else(|_| self.temp.with_extension(format!("s{}", self.scratch)))
+    }
+
+    /// An [`IoError::Io`] about the target.
+    pub fn err(&self, e: std::io::Error) -> IoError {
+        IoError::Io {
+            path: self.target.clone(),
+            source: e,
+        }
+    }
+
+    fn inner(&mut self) -> &mut BufWriter<File> {
+        self.file.as_mut().expect("file is present until commit")
+    }
+
+    /// Flushes, syncs and renames the file onto its target.
+    pub fn commit(mut self) -> Result<()> {
+        let Some(w) = self.file.take() else {
+            return Ok(());
+        };
+        let res = w
+            .into_inner()
+            .map_err(|e| e.into_error())
+            .and_then(|f| f.sync_all())
+            .and_then(|_| fs::rename(&self.temp, &self.target));
+        res.map_err(|e| self.err(e))?;
+        // Renamed: only the scratch files are left to remove.
+        let rest: Vec<_> = unregister(self.id)
+            .into_iter()
+            .filter(|(p, _)| *p != self.temp)
+            .collect();
+        remove_all(&rest);
+        Ok(())
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.inner().write(buf)
+    }
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.inner().write_all(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner().flush()
+    }
+}
+
+impl Seek for AtomicFile {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.inner().seek(pos)
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.file.take().is_some() {
+            remove_all(&unregister(self.id));
+        }
+    }
+}
+
+/// A directory written under a temporary name and renamed onto its target
+/// by [`AtomicDir::commit`]; the target must not exist. Dropped
+/// uncommitted, it leaves nothing behind.
+pub struct AtomicDir {
+    target: PathBuf,
+    temp: PathBuf,
+    id: u64,
+    done: bool,
+}
+
+impl AtomicDir {
+    /// Starts writing the directory `target`.
+    pub fn create(target: &Path) -> Result<AtomicDir> {
+        check_not_input(target)?;
+        if target.exists() {
+            return Err(IoError::Exists {
+                path: target.to_path_buf(),
+            });
+        }
+        let id = SEQ.fetch_add(1, Ordering::Relaxed);
+        let temp = temp_for(target, id, 0, true)?;
+        if let Err(e) = fs::create_dir(&temp) {
+            unregister(id);
+            return Err(IoError::Io {
+                path: target.to_path_buf(),
+                source: e,
+            });
+        }
+        Ok(AtomicDir {
+            target: target.to_path_buf(),
+            temp,
+            id,
+            done: false,
+        })
+    }
+
+    /// Where to write the directory's files meanwhile.
+    pub fn path(&self) -> &Path {
+        &self.temp
+    }
+
+    /// The target this directory becomes.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Writes one file of the directory.
+    pub fn write(&self, name: &str, bytes: &[u8]) -> Result<()> {
+        fs::write(self.temp.join(name), bytes).map_err(|e| IoError::Io {
+            path: self.target.join(name),
+            source: e,
+        })
+    }
+
+    /// Renames the directory onto its target (which must still not exist).
+    pub fn commit(mut self) -> Result<()> {
+        if self.target.exists() {
+            return Err(IoError::Exists {
+                path: self.target.clone(),
+            });
+        }
+        fs::rename(&self.temp, &self.target).map_err(|e| IoError::Io {
+            path: self.target.clone(),
+            source: e,
+        })?;
+        self.done = true;
+        unregister(self.id);
+        Ok(())
+    }
+}
+
+impl Drop for AtomicDir {
+    fn drop(&mut self) {
+        if !self.done {
+            remove_all(&unregister(self.id));
+        }
+    }
+}
+
+/// Writes `bytes` to `target` atomically.
+pub fn write_file(target: &Path, bytes: &[u8]) -> Result<()> {
+    let mut f = AtomicFile::create(target)?;
+    f.write_all(bytes).map_err(|e| f.err(e))?;
+    f.commit()
+}
+
+/// Commits several files as one output (a `.raw` and its `.json` sidecar):
+/// if a later rename fails, the files already renamed are removed again, so
+/// either all targets are new or none is left from this run.
+pub fn commit_all(files: Vec<AtomicFile>) -> Result<()> {
+    let mut done: Vec<PathBuf> = Vec::new();
+    for f in files {
+        let target = f.target().to_path_buf();
+        if let Err(e) = f.commit() {
+            for d in &done {
+                let _ = fs::remove_file(d);
+            }
+            return Err(e);
+        }
+        done.push(target);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("mf-io-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn entries(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn dropped_outputs_leave_nothing_and_committed_ones_appear_whole() {
+        let d = dir("drop");
+        let t = d.join("a.bin");
+        {
+            let mut f = AtomicFile::create(&t).unwrap();
+            f.write_all(&[1; 1000]).unwrap();
+            let s = f.scratch_path();
+            fs::write(&s, b"scratch").unwrap();
+            assert_eq!(entries(&d).len(), 2);
+        }
+        assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+        let mut f = AtomicFile::create(&t).unwrap();
+        f.write_all(b"done").unwrap();
+        f.commit().unwrap();
+        assert_eq!(entries(&d), vec!["a.bin".to_string()]);
+        assert_eq!(fs::read(&t).unwrap(), b"done");
+        let sub = d.join("stack");
+        {
+            let a = AtomicDir::create(&sub).unwrap();
+            a.write("x.png", b"x").unwrap();
+        }
+        assert_eq!(entries(&d), vec!["a.bin".to_string()]);
+        let a = AtomicDir::create(&sub).unwrap();
+        a.write("x.png", b"x").unwrap();
+        a.commit().unwrap();
+        assert_eq!(entries(&sub), vec!["x.png".to_string()]);
+        assert!(matches!(
+            AtomicDir::create(&sub),
+            Err(IoError::Exists { .. })
+        ));
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn two_writers_of_one_target_use_separate_temporaries() {
+        let d = dir("two");
+        let t = d.join("m.stl");
+        let mut a = AtomicFile::create(&t).unwrap();
+        let mut b = AtomicFile::create(&t).unwrap();
+        a.write_all(b"first").unwrap();
+        b.write_all(b"second").unwrap();
+        b.commit().unwrap();
+        assert_eq!(fs::read(&t).unwrap(), b"second");
+        a.commit().unwrap();
+        assert_eq!(fs::read(&t).unwrap(), b"first");
+        assert_eq!(entries(&d), vec!["m.stl".to_string()]);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn long_names_work_and_inputs_are_protected() {
+        let d = dir("long");
+        // 255 bytes: the longest name most file systems allow.
+        let t = d.join("n".repeat(251) + ".stl");
+        write_file(&t, b"ok").unwrap();
+        assert_eq!(fs::read(&t).unwrap(), b"ok");
+        let model = d.join("model.hf");
+        fs::write(&model, b"model").unwrap();
+        register_input(&model);
+        let e = AtomicFile::create(&d.join(".").join("model.hf"))
+            .err()
+            .unwrap();
+        assert!(matches!(e, IoError::WouldOverwriteInput { .. }), "{e}");
+        assert_eq!(fs::read(&model).unwrap(), b"model");
+        fs::remove_dir_all(&d).unwrap();
+    }
+}
