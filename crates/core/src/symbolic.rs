@@ -48,52 +48,68 @@ impl Expr {
     }
 }
 
-fn grad(e: &Expr, memo: &mut HashMap<*const ExprNode, Grad>) -> Grad {
-    let key = Arc::as_ptr(&e.0);
-    if let Some(g) = memo.get(&key) {
-        return g.clone();
+/// Children whose gradients the gradient of `e` is built from.
+fn grad_inputs(e: &Expr) -> Vec<&Expr> {
+    match e.node() {
+        ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => vec![],
+        ExprNode::Unary(_, a) | ExprNode::PowI(a, _) => vec![a],
+        ExprNode::Binary(_, a, b) | ExprNode::Select(_, a, b) => vec![a, b],
+        // Second derivatives of data fields are not modelled.
+        ExprNode::Field { comp, args, .. } if *comp == 0 => args.iter().collect(),
+        ExprNode::Field { .. } => vec![],
     }
-    let g = match e.node() {
-        ExprNode::Var(a) => {
-            let mut g = zero();
-            g[*a as usize] = Expr::constant(1.0);
-            g
+}
+
+/// Iterative post-order walk (models chain 100k nodes deep): a node's
+/// gradient is built once those of its inputs are in `memo`.
+fn grad(root: &Expr, memo: &mut HashMap<*const ExprNode, Grad>) -> Grad {
+    let key = |e: &Expr| Arc::as_ptr(&e.0);
+    let mut stack: Vec<(&Expr, bool)> = vec![(root, false)];
+    while let Some((e, expanded)) = stack.pop() {
+        if memo.contains_key(&key(e)) {
+            continue;
         }
-        ExprNode::Const(_) | ExprNode::Param { .. } => zero(),
-        ExprNode::Unary(op, a) => {
-            let da = grad(a, memo);
-            scale(&da, &unary_factor(*op, a, e))
+        if !expanded {
+            stack.push((e, true));
+            for c in grad_inputs(e).into_iter().rev() {
+                if !memo.contains_key(&key(c)) {
+                    stack.push((c, false));
+                }
+            }
+            continue;
         }
-        ExprNode::Binary(op, a, b) => {
-            let (da, db) = (grad(a, memo), grad(b, memo));
-            let (ka, kb) = binary_factors(*op, a, b, e);
-            add(&scale(&da, &ka), &scale(&db, &kb))
-        }
-        ExprNode::PowI(a, n) => {
-            let da = grad(a, memo);
-            scale(&da, &(*n as f64 * a.powi(n - 1)))
-        }
-        ExprNode::Select(c, a, b) => {
-            let (da, db) = (grad(a, memo), grad(b, memo));
-            std::array::from_fn(|i| Expr::select(c.clone(), da[i].clone(), db[i].clone()))
-        }
-        ExprNode::Field { field, comp, args } => {
-            if *comp != 0 {
-                // Second derivatives of data fields are not modelled.
-                zero()
-            } else {
+        let d = |c: &Expr| &memo[&key(c)];
+        let g = match e.node() {
+            ExprNode::Var(a) => {
+                let mut g = zero();
+                g[*a as usize] = Expr::constant(1.0);
+                g
+            }
+            ExprNode::Const(_) | ExprNode::Param { .. } => zero(),
+            ExprNode::Unary(op, a) => scale(d(a), &unary_factor(*op, a, e)),
+            ExprNode::Binary(op, a, b) => {
+                let (ka, kb) = binary_factors(*op, a, b, e);
+                add(&scale(d(a), &ka), &scale(d(b), &kb))
+            }
+            ExprNode::PowI(a, n) => scale(d(a), &(*n as f64 * a.powi(n - 1))),
+            ExprNode::Select(c, a, b) => {
+                let (da, db) = (d(a), d(b));
+                std::array::from_fn(|i| Expr::select(c.clone(), da[i].clone(), db[i].clone()))
+            }
+            ExprNode::Field { field, comp, args } => {
                 let mut out = zero();
-                for (k, arg) in args.iter().enumerate() {
-                    let dk = grad(arg, memo);
-                    let part = Expr::field_comp(field.clone(), k as u8 + 1, args.clone());
-                    out = add(&out, &scale(&dk, &part));
+                if *comp == 0 {
+                    for (k, arg) in args.iter().enumerate() {
+                        let part = Expr::field_comp(field.clone(), k as u8 + 1, args.clone());
+                        out = add(&out, &scale(d(arg), &part));
+                    }
                 }
                 out
             }
-        }
-    };
-    memo.insert(key, g.clone());
-    g
+        };
+        memo.insert(key(e), g);
+    }
+    memo[&key(root)].clone()
 }
 
 fn unary_factor(op: UnaryOp, a: &Expr, v: &Expr) -> Expr {
