@@ -22,8 +22,11 @@ pub type FunctionTable<'a> = &'a dyn Fn(&str) -> Option<Vec<ParamKind>>;
 const KEYWORDS: [&str; 12] = [
     "array", "if", "then", "else", "endif", "while", "loop", "endloop", "and", "or", "not", "xor",
 ];
-/// Deeper nesting is refused rather than risking the stack.
-const MAX_DEPTH: usize = 200;
+/// Deeper nesting of expressions (parentheses, calls, unary operators,
+/// indices) is refused rather than risking the stack.
+pub const MAX_DEPTH: usize = 200;
+/// Deeper nesting of `if` and `while` statements is refused likewise.
+pub const MAX_STMT_DEPTH: usize = 100;
 /// Arrays larger than this are refused rather than allocated.
 const MAX_ARRAY: f64 = 1e6;
 
@@ -58,6 +61,8 @@ pub struct Parser<'a> {
     arrays: Vec<(String, usize)>,
     scalars: HashSet<String>,
     depth: usize,
+    /// Nesting of `if` and `while` statements.
+    stmt_depth: usize,
     /// Open `if`/`while` statements, for recovery.
     nesting: usize,
 }
@@ -74,6 +79,7 @@ impl<'a> Parser<'a> {
             arrays: Vec::new(),
             scalars: HashSet::new(),
             depth: 0,
+            stmt_depth: 0,
             nesting: 0,
         }
     }
@@ -417,40 +423,23 @@ impl<'a> Parser<'a> {
 
     fn statement(&mut self) -> PResult<Stmt> {
         let pos = self.pos();
-        if self.at_kw("if") {
-            self.bump();
-            self.nesting += 1;
-            let cond = self.cond()?;
-            self.expect_kw("then", "Reserved word \"then\" expected")?;
-            let else_or_endif = "Reserved words \"else\" or \"endif\" expected";
-            let then_body = self.block(&["else", "endif"], else_or_endif);
-            let mut else_body = Vec::new();
-            if self.at_kw("else") {
-                self.bump();
-                else_body = self.block(&["endif"], "Reserved word \"endif\" expected");
-                self.expect_kw("endif", "Reserved word \"endif\" expected")?;
-            } else {
-                self.expect_kw("endif", else_or_endif)?;
+        if self.at_kw("if") || self.at_kw("while") {
+            if self.stmt_depth >= MAX_STMT_DEPTH {
+                return self.fail(&format!(
+                    "Statements are nested too deeply: more than {MAX_STMT_DEPTH} levels of \
+                     \"if\" and \"while\""
+                ));
             }
-            self.nesting -= 1;
-            self.expect(";", "Semicolon expected")?;
-            return Ok(Stmt::If {
-                cond,
-                then_body,
-                else_body,
-                pos,
+            self.stmt_depth += 1;
+            let r = crate::lower::grow(|| {
+                if self.at_kw("if") {
+                    self.if_statement(pos)
+                } else {
+                    self.while_statement(pos)
+                }
             });
-        }
-        if self.at_kw("while") {
-            self.bump();
-            self.nesting += 1;
-            let cond = self.cond()?;
-            self.expect_kw("loop", "Reserved word \"loop\" expected")?;
-            let body = self.block(&["endloop"], "Reserved word \"endloop\" expected");
-            self.expect_kw("endloop", "Reserved word \"endloop\" expected")?;
-            self.nesting -= 1;
-            self.expect(";", "Semicolon expected")?;
-            return Ok(Stmt::While { cond, body, pos });
+            self.stmt_depth -= 1;
+            return r;
         }
         let Tok::Id(name) = self.tok().clone() else {
             return self.fail("Identifier, \"if\" or \"while\"  expected");
@@ -486,6 +475,43 @@ impl<'a> Parser<'a> {
         Ok(Stmt::Assign { name, value, pos })
     }
 
+    fn if_statement(&mut self, pos: Pos) -> PResult<Stmt> {
+        self.bump();
+        self.nesting += 1;
+        let cond = self.cond()?;
+        self.expect_kw("then", "Reserved word \"then\" expected")?;
+        let else_or_endif = "Reserved words \"else\" or \"endif\" expected";
+        let then_body = self.block(&["else", "endif"], else_or_endif);
+        let mut else_body = Vec::new();
+        if self.at_kw("else") {
+            self.bump();
+            else_body = self.block(&["endif"], "Reserved word \"endif\" expected");
+            self.expect_kw("endif", "Reserved word \"endif\" expected")?;
+        } else {
+            self.expect_kw("endif", else_or_endif)?;
+        }
+        self.nesting -= 1;
+        self.expect(";", "Semicolon expected")?;
+        Ok(Stmt::If {
+            cond,
+            then_body,
+            else_body,
+            pos,
+        })
+    }
+
+    fn while_statement(&mut self, pos: Pos) -> PResult<Stmt> {
+        self.bump();
+        self.nesting += 1;
+        let cond = self.cond()?;
+        self.expect_kw("loop", "Reserved word \"loop\" expected")?;
+        let body = self.block(&["endloop"], "Reserved word \"endloop\" expected");
+        self.expect_kw("endloop", "Reserved word \"endloop\" expected")?;
+        self.nesting -= 1;
+        self.expect(";", "Semicolon expected")?;
+        Ok(Stmt::While { cond, body, pos })
+    }
+
     /// `[lit, ...]` with exactly `n` optionally signed number literals.
     fn literals(&mut self, n: usize) -> PResult<Vec<f64>> {
         self.expect("[", "Left bracket expected")?;
@@ -513,7 +539,7 @@ impl<'a> Parser<'a> {
             return self.fail("Expression is nested too deeply");
         }
         self.depth += 1;
-        let r = f(self);
+        let r = crate::lower::grow(|| f(self));
         self.depth -= 1;
         r
     }

@@ -20,6 +20,7 @@ pub use usage::calls_of;
 
 use crate::ast::{Pos, Program};
 use crate::library::Registry;
+pub(crate) use exec::grow;
 use exec::{Exec, Inputs, Stop};
 use microfrep_core::{Expr, PointEval, Tape};
 use std::sync::Arc;
