@@ -436,7 +436,8 @@ impl<'p> Exec<'p> {
                 return Err(Stop::NeedsPoint);
             }
             if let Some(m) = out.error {
-                return Err(Stop::Static(format!("{name}: {m}"), pos));
+                let shown = crate::library::shapes::display_name(name);
+                return Err(Stop::Static(format!("{shown}: {m}"), pos));
             }
             for (k, v) in out.writes {
                 if let ExprKind::Var(n) = &args[k].kind {

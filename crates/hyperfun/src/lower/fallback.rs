@@ -4,7 +4,7 @@
 //! the semantics are those of the lowered path. Wrapped as a core `Field`,
 //! it plugs into every evaluation mode; its intervals are the whole line.
 
-use super::errors::ErrorTable;
+use super::errors::{ErrorTable, RuntimeError};
 use super::exec::{Exec, Inputs, Stop};
 use crate::ast::Program;
 use crate::library::Registry;
@@ -41,9 +41,19 @@ impl Interp {
                 };
                 (v, code)
             }
-            // With constant inputs every condition is constant, and static
-            // errors were found when the model was loaded.
-            Err(Stop::NeedsPoint) | Err(Stop::Static(..)) => (f64::NAN, f64::NAN),
+            // A call whose constant arguments are only known at this point
+            // (e.g. a term count computed in a loop) can be invalid here:
+            // a run-time error at the call, like any other.
+            Err(Stop::Static(message, pos)) => {
+                let code = self.table.code(RuntimeError {
+                    message,
+                    line: pos.line,
+                    col: pos.col,
+                });
+                (f64::NAN, code)
+            }
+            // With constant inputs every condition is constant.
+            Err(Stop::NeedsPoint) => (f64::NAN, f64::NAN),
         }
     }
 }

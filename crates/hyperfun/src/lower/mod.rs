@@ -7,6 +7,7 @@
 //! per-point fallback (same executor, constant inputs) wrapped as a `Field`.
 
 mod census;
+mod check;
 mod errors;
 mod exec;
 mod fallback;
@@ -77,11 +78,14 @@ pub fn select_object(program: &Program, name: Option<&str>) -> Option<usize> {
 }
 
 /// Picks the object (`name`, default `my_model`, else the first) and lowers
-/// it with parameters `a[1..] = params`.
+/// it with parameters given as `(k, value)` pairs for `a[k]` (1-based; a
+/// later pair for the same `k` wins, unset ones are 0). Every index is
+/// checked against the object's declared `a[N]` and every value must be
+/// finite, before anything is sized from them.
 pub fn load_program(
     program: Arc<Program>,
     name: Option<&str>,
-    params: &[f64],
+    params: &[(usize, f64)],
 ) -> Result<Model, LowerError> {
     let Some(i) = select_object(&program, name) else {
         return Err(LowerError {
@@ -92,7 +96,37 @@ pub fn load_program(
             pos: Pos::default(),
         });
     };
-    lower(program, i, &Registry::standard(), params)
+    let dense = dense_params(&program.objects[i], params)?;
+    lower(program, i, &Registry::standard(), &dense)
+}
+
+/// `a[1..=N]` of `obj` from `(k, value)` pairs, checked.
+fn dense_params(obj: &crate::ast::Object, params: &[(usize, f64)]) -> Result<Vec<f64>, LowerError> {
+    let error = |message: String| LowerError {
+        message,
+        pos: Pos::default(),
+    };
+    let mut dense = vec![0.0; obj.a_size];
+    for &(k, v) in params {
+        if k == 0 {
+            return Err(error(
+                "parameter index must be 1 or more (a[1] is the first)".into(),
+            ));
+        }
+        if k > obj.a_size {
+            return Err(error(format!(
+                "parameter a[{k}] out of range: object '{}' has a[{}]",
+                obj.name, obj.a_size
+            )));
+        }
+        if !v.is_finite() {
+            return Err(error(format!(
+                "parameter a[{k}] must be a finite number, not {v}"
+            )));
+        }
+        dense[k - 1] = v;
+    }
+    Ok(dense)
 }
 
 /// Lowers object `object` of `program`. `params` gives `a[1..]` (missing
@@ -104,6 +138,7 @@ pub fn lower(
     params: &[f64],
 ) -> Result<Model, LowerError> {
     let obj = &program.objects[object];
+    check::check_calls(&program, object, registry)?;
     let pvals: Vec<f64> = (0..obj.a_size)
         .map(|k| params.get(k).copied().unwrap_or(0.0))
         .collect();
