@@ -231,9 +231,11 @@ fn sawtooth(a: &[Arg]) -> Output {
             return Output::error("the term count (argument 2) is not a number")
         }
         Some(n) if n <= 1.0 => Expr::constant(0.0),
-        Some(n) if n > MAX_SAWTOOTH_TERMS => return Output::error(format!(
+        Some(n) if n > MAX_SAWTOOTH_TERMS => {
+            return Output::error(format!(
             "the term count (argument 2) is {n}; at most {MAX_SAWTOOTH_TERMS} terms are supported"
-        )),
+        ))
+        }
         Some(n) => {
             let (t, f) = (a[0].real(), a[3].real());
             let mut sum = Expr::constant(0.0);
