@@ -37,6 +37,8 @@ pub enum Len {
 impl Len {
     /// Whether `n` elements satisfy the rule, given all argument lengths
     /// (`None` for a real argument).
+    // `is_multiple_of` needs Rust 1.87; the workspace supports 1.85.
+    #[allow(clippy::manual_is_multiple_of)]
     pub fn accepts(self, n: usize, lens: &[Option<usize>]) -> bool {
         let len = |k: usize| lens.get(k).copied().flatten().unwrap_or(0);
         match self {

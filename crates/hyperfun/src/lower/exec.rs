@@ -10,8 +10,13 @@ use crate::library::{Arg, Kind, Registry, EPS};
 use microfrep_core::Expr;
 use std::collections::HashMap;
 
-/// Loop iterations allowed in one evaluation (the reference would hang).
+/// Loop iterations allowed when a model is lowered (once, at load; the
+/// reference would hang). Loops whose trip count is fixed run here, e.g. a
+/// loop building a union of 100k spheres.
 pub const LOOP_BUDGET: u64 = 1_000_000;
+/// Loop iterations allowed per point in the per-point fallback: 100 times
+/// the iterations of a heavy escape-time fractal, about 0.2 s of work.
+pub const POINT_LOOP_BUDGET: u64 = 100_000;
 
 /// Why a model cannot become one expression graph.
 #[derive(Debug, Clone, PartialEq)]
@@ -82,10 +87,22 @@ pub struct Exec<'p> {
     /// Truth value of "this statement runs" (inside point-dependent `if`s).
     guard: Expr,
     budget: u64,
+    /// Set when a loop ran out of iterations.
+    pub limit_hit: bool,
 }
 
 impl<'p> Exec<'p> {
     pub fn new(program: &'p Program, registry: &'p Registry, table: &'p ErrorTable) -> Self {
+        Self::with_budget(program, registry, table, LOOP_BUDGET)
+    }
+
+    /// An executor allowing `budget` loop iterations in all.
+    pub fn with_budget(
+        program: &'p Program,
+        registry: &'p Registry,
+        table: &'p ErrorTable,
+        budget: u64,
+    ) -> Self {
         Exec {
             program,
             registry,
@@ -93,7 +110,8 @@ impl<'p> Exec<'p> {
             err: c(0.0),
             sites: Vec::new(),
             guard: c(1.0),
-            budget: LOOP_BUDGET,
+            budget,
+            limit_hit: false,
         }
     }
 
@@ -213,6 +231,7 @@ impl<'p> Exec<'p> {
                     Some(_) => {}
                 }
                 if self.budget == 0 {
+                    self.limit_hit = true;
                     self.fault(c(1.0), ops::LOOP_LIMIT, *pos);
                     break;
                 }

@@ -48,6 +48,8 @@ pub struct Model {
     /// False when the model runs through the per-point fallback (parameters
     /// are then fixed at load time and intervals are unbounded).
     pub lowered: bool,
+    /// The per-point interpreter, when `lowered` is false.
+    interp: Option<Arc<fallback::Interp>>,
 }
 
 /// A static error found while lowering (message, position).
@@ -161,6 +163,7 @@ pub fn lower(
         errors: table.clone(),
         params: names.into_iter().zip(pvals.iter().copied()).collect(),
         lowered: true,
+        interp: None,
     };
     match ex.run(obj, inputs) {
         Ok(value) => {
@@ -179,6 +182,7 @@ pub fn lower(
                 registry: registry.clone(),
                 table,
                 params: pvals,
+                runaway: std::sync::OnceLock::new(),
             });
             let field = |error| {
                 Expr::field(Arc::new(fallback::Output {
@@ -190,6 +194,7 @@ pub fn lower(
                 value: field(false),
                 error: field(true),
                 lowered: false,
+                interp: Some(interp),
                 ..base
             })
         }
@@ -205,6 +210,17 @@ fn guard(value: Expr, error: &Expr) -> Expr {
 }
 
 impl Model {
+    /// The loop that ran out of iterations, once any evaluation of a
+    /// per-point model met one. From then on every evaluation of the model
+    /// reports this error at once (values computed before it are not
+    /// revised), so a consumer that evaluates many points should check this
+    /// afterwards and fail with the error: the model is broken, and which
+    /// points got values first depends on the evaluation order.
+    pub fn runaway_loop(&self) -> Option<RuntimeError> {
+        let code = *self.interp.as_ref()?.runaway.get()?;
+        self.errors.get(code)
+    }
+
     /// Value and error code in one tape (outputs 0 and 1).
     pub fn tape(&self) -> Tape {
         Tape::with_outputs(&[self.value.clone(), self.error.clone()])
