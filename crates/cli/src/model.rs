@@ -60,29 +60,16 @@ fn load_hf(path: &str, opts: &Options) -> Result<Model> {
     microfrep_structures_hf::install();
     let src = std::fs::read_to_string(path).with_context(|| format!("reading {path}"))?;
     let program = microfrep_hyperfun::parse(&src, path).map_err(|d| anyhow!("{d}"))?;
-    let mut params = Vec::new();
-    for &(k, v) in &opts.params {
-        if k == 0 {
-            bail!("parameter index must be 1 or more (a[1] is the first)");
-        }
-        if params.len() < k {
-            params.resize(k, 0.0);
-        }
-        params[k - 1] = v;
-    }
-    let m =
-        microfrep_hyperfun::lower::load_program(Arc::new(program), opts.object.as_deref(), &params)
-            .map_err(|e| match e.pos.line {
-                0 => anyhow!("{path}: {}", e.message),
-                _ => anyhow!("{path}:{e}"),
-            })?;
-    if let Some(&(k, _)) = opts.params.iter().find(|(k, _)| *k > m.params.len()) {
-        bail!(
-            "parameter a[{k}] out of range: object '{}' has a[{}]",
-            m.object,
-            m.params.len()
-        );
-    }
+    // Indices are checked against the object's a[N] before anything is sized.
+    let m = microfrep_hyperfun::lower::load_program(
+        Arc::new(program),
+        opts.object.as_deref(),
+        &opts.params,
+    )
+    .map_err(|e| match e.pos.line {
+        0 => anyhow!("{path}: {}", e.message),
+        _ => anyhow!("{path}:{e}"),
+    })?;
     Ok(Model {
         expr: m.value.clone(),
         shape: m.shape(),

@@ -306,59 +306,53 @@ impl Expr {
     }
 
     fn remap_memo(&self, p: &[Expr; 3], memo: &mut HashMap<*const ExprNode, Expr>) -> Expr {
-        let key = Arc::as_ptr(&self.0);
-        if let Some(e) = memo.get(&key) {
-            return e.clone();
+        // Iterative post-order walk: generated models chain 100k nodes deep,
+        // more than a thread stack survives recursively.
+        let key = |e: &Expr| Arc::as_ptr(&e.0);
+        let mut stack: Vec<(&Expr, bool)> = vec![(self, false)];
+        while let Some((cur, expanded)) = stack.pop() {
+            if memo.contains_key(&key(cur)) {
+                continue;
+            }
+            if !expanded {
+                stack.push((cur, true));
+                for c in cur.children().into_iter().rev() {
+                    if !memo.contains_key(&key(c)) {
+                        stack.push((c, false));
+                    }
+                }
+                continue;
+            }
+            let m = |c: &Expr| memo[&key(c)].clone();
+            let out = match cur.node() {
+                ExprNode::Var(a) => p[*a as usize].clone(),
+                ExprNode::Const(_) | ExprNode::Param { .. } => cur.clone(),
+                ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
+                ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
+                ExprNode::PowI(a, n) => m(a).powi(*n),
+                ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
+                ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)),
+                ExprNode::Blend { op, args } => Expr::blend(*op, std::array::from_fn(|i| m(&args[i]))),
+                ExprNode::Field { field, comp, args } => Expr::field_comp(
+                    field.clone(),
+                    *comp,
+                    [m(&args[0]), m(&args[1]), m(&args[2])],
+                ),
+            };
+            memo.insert(key(cur), out);
         }
-        let out = match self.node() {
-            ExprNode::Var(a) => p[*a as usize].clone(),
-            ExprNode::Const(_) | ExprNode::Param { .. } => self.clone(),
-            ExprNode::Unary(op, a) => Expr::unary(*op, a.remap_memo(p, memo)),
-            ExprNode::Binary(op, a, b) => {
-                Expr::binary(*op, a.remap_memo(p, memo), b.remap_memo(p, memo))
-            }
-            ExprNode::PowI(a, n) => a.remap_memo(p, memo).powi(*n),
-            ExprNode::Select(c, a, b) => Expr::select(
-                c.remap_memo(p, memo),
-                a.remap_memo(p, memo),
-                b.remap_memo(p, memo),
-            ),
-            ExprNode::Set { op, a, b, alpha } => Expr::set(
-                *op,
-                &a.remap_memo(p, memo),
-                &b.remap_memo(p, memo),
-                alpha.remap_memo(p, memo),
-            ),
-            ExprNode::Blend { op, args } => {
-                let m: [Expr; 6] = std::array::from_fn(|i| args[i].remap_memo(p, memo));
-                Expr::blend(*op, m)
-            }
-            ExprNode::Field { field, comp, args } => Expr::field_comp(
-                field.clone(),
-                *comp,
-                [
-                    args[0].remap_memo(p, memo),
-                    args[1].remap_memo(p, memo),
-                    args[2].remap_memo(p, memo),
-                ],
-            ),
-        };
-        memo.insert(key, out.clone());
-        out
+        memo[&key(self)].clone()
     }
 
     /// Number of distinct tree nodes (by pointer), a size measure for tests and reports.
     pub fn node_count(&self) -> usize {
-        fn walk(e: &Expr, seen: &mut std::collections::HashSet<*const ExprNode>) {
-            if !seen.insert(Arc::as_ptr(&e.0)) {
-                return;
-            }
-            for c in e.children() {
-                walk(c, seen);
+        let mut seen = std::collections::HashSet::new();
+        let mut stack = vec![self];
+        while let Some(e) = stack.pop() {
+            if seen.insert(Arc::as_ptr(&e.0)) {
+                stack.extend(e.children());
             }
         }
-        let mut seen = std::collections::HashSet::new();
-        walk(self, &mut seen);
         seen.len()
     }
 
@@ -495,5 +489,64 @@ impl std::ops::Neg for &Expr {
     type Output = Expr;
     fn neg(self) -> Expr {
         Expr::unary(UnaryOp::Neg, self.clone())
+    }
+}
+
+// Dropping a long chain (a sum of 100k terms, 100k statements of HyperFun)
+// would recurse once per node and overflow the stack. Children that this
+// node owns alone and that have children themselves are moved into a
+// worklist (replaced by a shared leaf) and dropped one at a time, so the
+// recursion depth stays one. Shared children only lose a reference.
+impl Drop for ExprNode {
+    fn drop(&mut self) {
+        let mut work = Vec::new();
+        self.take_owned_subtrees(&mut work);
+        while let Some(mut e) = work.pop() {
+            if let Some(node) = Arc::get_mut(&mut e.0) {
+                node.take_owned_subtrees(&mut work);
+            }
+        }
+    }
+}
+
+impl ExprNode {
+    /// Moves every child that would drop a subtree along with this node into
+    /// `out`, leaving a shared leaf in its place.
+    fn take_owned_subtrees(&mut self, out: &mut Vec<Expr>) {
+        fn take(e: &mut Expr, out: &mut Vec<Expr>) {
+            let Some(node) = Arc::get_mut(&mut e.0) else {
+                return;
+            };
+            let leaf = matches!(
+                node,
+                ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. }
+            );
+            if !leaf {
+                static PLACEHOLDER: std::sync::OnceLock<Expr> = std::sync::OnceLock::new();
+                let hole = PLACEHOLDER.get_or_init(|| Expr::constant(0.0)).clone();
+                out.push(std::mem::replace(e, hole));
+            }
+        }
+        // Every kind with children must be listed, or its drop recurses.
+        match self {
+            ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => {}
+            ExprNode::Unary(_, a) | ExprNode::PowI(a, _) => take(a, out),
+            ExprNode::Binary(_, a, b) => {
+                take(a, out);
+                take(b, out);
+            }
+            ExprNode::Select(c, a, b) => {
+                take(c, out);
+                take(a, out);
+                take(b, out);
+            }
+            ExprNode::Set { a, b, alpha, .. } => {
+                take(a, out);
+                take(b, out);
+                take(alpha, out);
+            }
+            ExprNode::Blend { args, .. } => args.iter_mut().for_each(|a| take(a, out)),
+            ExprNode::Field { args, .. } => args.iter_mut().for_each(|a| take(a, out)),
+        }
     }
 }

@@ -139,3 +139,62 @@ pub enum ExprKind {
     /// A built-in, library function or earlier object.
     Call(String, Vec<Expr>),
 }
+
+// A generated model can chain 100k operators (`f1 | f2 | ...`), which the
+// parser builds as a left-deep tree; the derived drop would recurse once per
+// node and overflow the stack. These drops move the children into a
+// worklist instead, so the recursion depth stays one.
+impl Drop for Expr {
+    fn drop(&mut self) {
+        if matches!(self.kind, ExprKind::Num(_) | ExprKind::Var(_)) {
+            return;
+        }
+        let mut work = Vec::new();
+        take_children(&mut self.kind, &mut work);
+        while let Some(mut e) = work.pop() {
+            take_children(&mut e.kind, &mut work);
+        }
+    }
+}
+
+fn take_children(kind: &mut ExprKind, out: &mut Vec<Expr>) {
+    match std::mem::replace(kind, ExprKind::Num(0.0)) {
+        ExprKind::Num(_) | ExprKind::Var(_) => {}
+        ExprKind::Index(_, a) | ExprKind::Unary(_, a) => out.push(*a),
+        ExprKind::Binary(_, a, b) => out.extend([*a, *b]),
+        ExprKind::Call(_, args) => out.extend(args),
+    }
+}
+
+impl Drop for Cond {
+    fn drop(&mut self) {
+        if matches!(self, Cond::Value(_)) {
+            return;
+        }
+        let mut work = Vec::new();
+        take_conds(self, &mut work);
+        while let Some(mut c) = work.pop() {
+            take_conds(&mut c, &mut work);
+        }
+    }
+}
+
+fn take_conds(c: &mut Cond, out: &mut Vec<Cond>) {
+    let mut take = |b: &mut Box<Cond>| {
+        if !matches!(**b, Cond::Value(_)) {
+            let leaf = Cond::Value(Expr {
+                kind: ExprKind::Num(0.0),
+                pos: Pos::default(),
+            });
+            out.push(std::mem::replace(&mut **b, leaf));
+        }
+    };
+    match c {
+        Cond::Value(_) => {}
+        Cond::Not(a) => take(a),
+        Cond::Cmp(_, a, b) | Cond::And(a, b) | Cond::Or(a, b) => {
+            take(a);
+            take(b);
+        }
+    }
+}

@@ -59,15 +59,18 @@ impl Diagnostics {
                 Severity::Warning => "warning",
             };
             let (line, col) = (d.pos.line, d.pos.col);
-            // Lines split at LF only, as the scanner counts them; CR is shown as nothing.
+            // Lines split at LF only, as the scanner counts them; CR is shown
+            // as nothing, a byte-order mark is skipped as the scanner does.
+            let src = src.strip_prefix('\u{feff}').unwrap_or(src);
             let text = src
                 .split('\n')
                 .nth(line.saturating_sub(1) as usize)
                 .unwrap_or("");
             let text = text.replace('\r', "");
+            let (text, col_in_text) = excerpt(&text, col.saturating_sub(1) as usize);
             let pad: String = text
                 .chars()
-                .take(col.saturating_sub(1) as usize)
+                .take(col_in_text)
                 .map(|c| if c == '\t' { '\t' } else { ' ' })
                 .collect();
             out += &format!(
@@ -77,6 +80,32 @@ impl Diagnostics {
         }
         out
     }
+}
+
+/// Characters of context shown on each side of the caret.
+const CONTEXT: usize = 80;
+
+/// The part of a long line around character `col` (0-based): at most
+/// [`CONTEXT`] characters each side, with `...` where text was cut, and the
+/// caret's position in the excerpt. A generated model can be one line of
+/// megabytes.
+fn excerpt(line: &str, col: usize) -> (String, usize) {
+    let n = line.chars().count();
+    if n <= 2 * CONTEXT + 1 {
+        return (line.to_string(), col);
+    }
+    let from = col.saturating_sub(CONTEXT);
+    let to = (col + CONTEXT + 1).min(n);
+    let mut text: String = line.chars().skip(from).take(to - from).collect();
+    let mut caret = col - from;
+    if from > 0 {
+        text.insert_str(0, "...");
+        caret += 3;
+    }
+    if to < n {
+        text.push_str("...");
+    }
+    (text, caret)
 }
 
 impl fmt::Display for Diagnostics {

@@ -35,6 +35,8 @@ const MAX_COMMENT: usize = 256;
 /// Splits `src` into tokens (ending with `Eof`). `accept_cr`: treat CR as
 /// whitespace with one warning instead of an unknown lexem.
 pub fn lex(src: &str, accept_cr: bool, diags: &mut Vec<Diagnostic>) -> Vec<Token> {
+    // A UTF-8 byte-order mark (written by some editors) is not text.
+    let src = src.strip_prefix('\u{feff}').unwrap_or(src);
     let b = src.as_bytes();
     let mut out = Vec::new();
     let (mut i, mut line, mut col) = (0usize, 1u32, 1u32);

@@ -83,8 +83,20 @@ pub fn parse_with_table(
 
 /// Parses and lowers object `object` (default `my_model`, else the first).
 pub fn load(src: &str, file: &str, object: Option<&str>) -> Result<Model, Diagnostics> {
+    load_with_params(src, file, object, &[])
+}
+
+/// As [`load`], with parameters `a[k] = value` given as `(k, value)` pairs
+/// (1-based, checked against the object's `a[N]`; see
+/// [`lower::load_program`]).
+pub fn load_with_params(
+    src: &str,
+    file: &str,
+    object: Option<&str>,
+    params: &[(usize, f64)],
+) -> Result<Model, Diagnostics> {
     let program = std::sync::Arc::new(parse(src, file)?);
-    lower::load_program(program, object, &[]).map_err(|e| {
+    lower::load_program(program, object, params).map_err(|e| {
         let d = Diagnostic {
             severity: Severity::Error,
             pos: e.pos,

@@ -22,8 +22,11 @@ pub type FunctionTable<'a> = &'a dyn Fn(&str) -> Option<Vec<ParamKind>>;
 const KEYWORDS: [&str; 12] = [
     "array", "if", "then", "else", "endif", "while", "loop", "endloop", "and", "or", "not", "xor",
 ];
-/// Deeper nesting is refused rather than risking the stack.
-const MAX_DEPTH: usize = 200;
+/// Deeper nesting of expressions (parentheses, calls, unary operators,
+/// indices) is refused rather than risking the stack.
+pub const MAX_DEPTH: usize = 200;
+/// Deeper nesting of `if` and `while` statements is refused likewise.
+pub const MAX_STMT_DEPTH: usize = 100;
 /// Arrays larger than this are refused rather than allocated.
 const MAX_ARRAY: f64 = 1e6;
 
@@ -58,6 +61,8 @@ pub struct Parser<'a> {
     arrays: Vec<(String, usize)>,
     scalars: HashSet<String>,
     depth: usize,
+    /// Nesting of `if` and `while` statements.
+    stmt_depth: usize,
     /// Open `if`/`while` statements, for recovery.
     nesting: usize,
 }
@@ -74,6 +79,7 @@ impl<'a> Parser<'a> {
             arrays: Vec::new(),
             scalars: HashSet::new(),
             depth: 0,
+            stmt_depth: 0,
             nesting: 0,
         }
     }
@@ -417,40 +423,23 @@ impl<'a> Parser<'a> {
 
     fn statement(&mut self) -> PResult<Stmt> {
         let pos = self.pos();
-        if self.at_kw("if") {
-            self.bump();
-            self.nesting += 1;
-            let cond = self.cond()?;
-            self.expect_kw("then", "Reserved word \"then\" expected")?;
-            let else_or_endif = "Reserved words \"else\" or \"endif\" expected";
-            let then_body = self.block(&["else", "endif"], else_or_endif);
-            let mut else_body = Vec::new();
-            if self.at_kw("else") {
-                self.bump();
-                else_body = self.block(&["endif"], "Reserved word \"endif\" expected");
-                self.expect_kw("endif", "Reserved word \"endif\" expected")?;
-            } else {
-                self.expect_kw("endif", else_or_endif)?;
+        if self.at_kw("if") || self.at_kw("while") {
+            if self.stmt_depth >= MAX_STMT_DEPTH {
+                return self.fail(&format!(
+                    "Statements are nested too deeply: more than {MAX_STMT_DEPTH} levels of \
+                     \"if\" and \"while\""
+                ));
             }
-            self.nesting -= 1;
-            self.expect(";", "Semicolon expected")?;
-            return Ok(Stmt::If {
-                cond,
-                then_body,
-                else_body,
-                pos,
+            self.stmt_depth += 1;
+            let r = crate::lower::grow(|| {
+                if self.at_kw("if") {
+                    self.if_statement(pos)
+                } else {
+                    self.while_statement(pos)
+                }
             });
-        }
-        if self.at_kw("while") {
-            self.bump();
-            self.nesting += 1;
-            let cond = self.cond()?;
-            self.expect_kw("loop", "Reserved word \"loop\" expected")?;
-            let body = self.block(&["endloop"], "Reserved word \"endloop\" expected");
-            self.expect_kw("endloop", "Reserved word \"endloop\" expected")?;
-            self.nesting -= 1;
-            self.expect(";", "Semicolon expected")?;
-            return Ok(Stmt::While { cond, body, pos });
+            self.stmt_depth -= 1;
+            return r;
         }
         let Tok::Id(name) = self.tok().clone() else {
             return self.fail("Identifier, \"if\" or \"while\"  expected");
@@ -486,6 +475,43 @@ impl<'a> Parser<'a> {
         Ok(Stmt::Assign { name, value, pos })
     }
 
+    fn if_statement(&mut self, pos: Pos) -> PResult<Stmt> {
+        self.bump();
+        self.nesting += 1;
+        let cond = self.cond()?;
+        self.expect_kw("then", "Reserved word \"then\" expected")?;
+        let else_or_endif = "Reserved words \"else\" or \"endif\" expected";
+        let then_body = self.block(&["else", "endif"], else_or_endif);
+        let mut else_body = Vec::new();
+        if self.at_kw("else") {
+            self.bump();
+            else_body = self.block(&["endif"], "Reserved word \"endif\" expected");
+            self.expect_kw("endif", "Reserved word \"endif\" expected")?;
+        } else {
+            self.expect_kw("endif", else_or_endif)?;
+        }
+        self.nesting -= 1;
+        self.expect(";", "Semicolon expected")?;
+        Ok(Stmt::If {
+            cond,
+            then_body,
+            else_body,
+            pos,
+        })
+    }
+
+    fn while_statement(&mut self, pos: Pos) -> PResult<Stmt> {
+        self.bump();
+        self.nesting += 1;
+        let cond = self.cond()?;
+        self.expect_kw("loop", "Reserved word \"loop\" expected")?;
+        let body = self.block(&["endloop"], "Reserved word \"endloop\" expected");
+        self.expect_kw("endloop", "Reserved word \"endloop\" expected")?;
+        self.nesting -= 1;
+        self.expect(";", "Semicolon expected")?;
+        Ok(Stmt::While { cond, body, pos })
+    }
+
     /// `[lit, ...]` with exactly `n` optionally signed number literals.
     fn literals(&mut self, n: usize) -> PResult<Vec<f64>> {
         self.expect("[", "Left bracket expected")?;
@@ -513,7 +539,7 @@ impl<'a> Parser<'a> {
             return self.fail("Expression is nested too deeply");
         }
         self.depth += 1;
-        let r = f(self);
+        let r = crate::lower::grow(|| f(self));
         self.depth -= 1;
         r
     }
@@ -666,13 +692,63 @@ impl<'a> Parser<'a> {
                 }
                 self.bump();
                 if !self.scalars.contains(&n) {
-                    self.error_at(pos, "Unassigned identificator used in expression");
+                    let why = self.unknown_name(&n);
+                    self.error_at(
+                        pos,
+                        &format!("Unassigned identificator used in expression: {why}"),
+                    );
                     self.skip_group();
                 }
                 e(ExprKind::Var(n))
             }
             _ => self.fail("Expression expected"),
         }
+    }
+
+    /// Arguments after the current `,` up to the closing parenthesis
+    /// (counting commas outside nested brackets); looks ahead only.
+    fn count_remaining_args(&self) -> usize {
+        let (mut depth, mut n) = (0usize, 0);
+        for t in &self.toks[self.i..] {
+            match &t.tok {
+                Tok::P("(" | "[") => depth += 1,
+                Tok::P(")" | "]") if depth == 0 => break,
+                Tok::P(")" | "]") => depth -= 1,
+                Tok::P(",") if depth == 0 => n += 1,
+                Tok::P(";" | "}") | Tok::Eof => break,
+                _ => {}
+            }
+        }
+        n
+    }
+
+    /// Why a name cannot be used here, in plain words, with the closest
+    /// known name when one is near. The current token follows the name.
+    fn unknown_name(&self, n: &str) -> String {
+        if n == self.name {
+            return format!("'{n}' is the object being defined; it cannot use its own value");
+        }
+        if self.at("(") {
+            let registry = crate::library::Registry::standard();
+            let builtins = crate::lower::ops::BUILTINS.iter().map(|(b, _)| *b);
+            let names = registry.names().into_iter().chain(builtins);
+            let funcs = names.filter(|f| self.is_function(f)).map(str::to_string);
+            let objects = self.objects.iter().map(|o| o.name.clone());
+            let objects = objects.filter(|o| *o != self.name);
+            let near = closest(n, funcs.chain(objects));
+            let hint = near.map_or(String::new(), |m| {
+                format!(
+                    " (did you mean {}?)",
+                    crate::library::shapes::display_name(&m)
+                )
+            });
+            return format!("'{n}' is not a known function or an object defined above{hint}");
+        }
+        let vars = self.scalars.iter().cloned();
+        let arrays = self.arrays.iter().map(|(a, _)| a.clone());
+        let near = closest(n, vars.chain(arrays));
+        let hint = near.map_or(String::new(), |m| format!(" (did you mean {m}?)"));
+        format!("'{n}' is not a variable assigned before this point{hint}")
     }
 
     /// After an unknown name: skips a following `( ... )` or `[ ... ]` so a
@@ -717,15 +793,41 @@ impl<'a> Parser<'a> {
     fn call(&mut self, name: String, sig: &[ParamKind], pos: Pos) -> PResult<Expr> {
         self.bump();
         self.expect("(", "Left parenthes expected")?;
+        let shown = crate::library::shapes::display_name(&name).to_string();
         let mut args = Vec::with_capacity(sig.len());
         for (k, kind) in sig.iter().enumerate() {
+            if k > 0 && !self.at(",") {
+                let few = if self.at(")") {
+                    format!(
+                        ": too few arguments to {shown}: expected {}, got {k}",
+                        sig.len()
+                    )
+                } else {
+                    String::new()
+                };
+                return self.fail(&format!("Comma expected{few}"));
+            }
             if k > 0 {
-                self.expect(",", "Comma expected")?;
+                self.bump();
             }
             args.push(match kind {
                 ParamKind::Real => self.expr()?,
-                ParamKind::Array => self.array_arg("Error in argument in function call")?.0,
+                ParamKind::Array => {
+                    let m = format!(
+                        "Error in argument in function call: argument {} of {shown} must be \
+                         the name of an array (x, a, s or a declared array)",
+                        k + 1
+                    );
+                    self.array_arg(&m)?.0
+                }
             });
+        }
+        if self.at(",") {
+            let got = sig.len() + self.count_remaining_args();
+            return self.fail(&format!(
+                "Right parenthes expected: too many arguments to {shown}: expected {}, got {got}",
+                sig.len()
+            ));
         }
         self.expect(")", "Right parenthes expected")?;
         Ok(Expr {
@@ -759,10 +861,52 @@ impl<'a> Parser<'a> {
             }
             args.push(arg);
         }
+        if self.at(",") {
+            let got = 3 + self.count_remaining_args();
+            return self.fail(&format!(
+                "Right parenthes expected: too many arguments to object '{name}': it takes \
+                 x, a and optionally s (3 arrays), got {got}"
+            ));
+        }
         self.expect(")", "Right parenthes expected")?;
         Ok(Expr {
             kind: ExprKind::Call(name, args),
             pos,
         })
     }
+}
+
+/// The candidate nearest to `n` by edit distance, if it is close (at most
+/// one edit per three letters; names shorter than three get none).
+fn closest(n: &str, candidates: impl Iterator<Item = String>) -> Option<String> {
+    let limit = n.chars().count() / 3;
+    if limit == 0 {
+        return None;
+    }
+    candidates
+        .filter(|c| c != n)
+        .map(|c| (edit_distance(n, &c), c))
+        .filter(|(d, _)| *d <= limit)
+        .min()
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = if ca == *cb {
+                prev
+            } else {
+                1 + prev.min(cur).min(row[j])
+            };
+            prev = cur;
+        }
+    }
+    row[b.len()]
 }

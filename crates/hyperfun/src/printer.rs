@@ -17,6 +17,10 @@ use std::fmt::Write;
 
 /// Deeper text is moved into a temporary, keeping the parser's nesting low.
 const MAX_TEXT_DEPTH: usize = 24;
+/// Subtrees this tall are written into temporaries bottom up before the
+/// (recursive) writer runs, so its recursion stays this shallow however
+/// long the expression's chains are.
+const MAX_TREE_DEPTH: usize = 32;
 
 /// The object `name(x[3], a[n]) { ... }` computing `expr`. An expression
 /// that cannot be written (a data-driven field, a bad object name) gives a
@@ -37,6 +41,7 @@ pub fn try_to_hyperfun(expr: &Expr, object_name: &str) -> Result<String, String>
     }
     let mut p = Printer::default();
     p.count(expr);
+    p.name_deep(expr)?;
     let (root, _) = p.emit(expr)?;
     let mut out = String::new();
     for (k, (pname, default)) in p.params.iter().enumerate() {
@@ -103,14 +108,58 @@ fn number(c: f64) -> String {
 
 impl Printer {
     /// Counts the parents of every node (each shared node once).
-    fn count(&mut self, e: &Expr) {
-        let n = self.uses.entry(key(e)).or_insert(0);
-        *n += 1;
-        if *n == 1 {
-            for c in e.children() {
-                self.count(c);
+    fn count(&mut self, root: &Expr) {
+        let mut stack = vec![root];
+        while let Some(e) = stack.pop() {
+            let n = self.uses.entry(key(e)).or_insert(0);
+            *n += 1;
+            if *n == 1 {
+                stack.extend(e.children());
             }
         }
+    }
+
+    /// Names every node whose subtree, counting named nodes as leaves, is
+    /// [`MAX_TREE_DEPTH`] tall, in post order (iteratively).
+    fn name_deep(&mut self, root: &Expr) -> Result<(), String> {
+        let mut height: HashMap<Key, usize> = HashMap::new();
+        let mut stack = vec![(root, false)];
+        while let Some((e, expanded)) = stack.pop() {
+            if height.contains_key(&key(e)) {
+                continue;
+            }
+            if !expanded {
+                stack.push((e, true));
+                for c in e.children() {
+                    if !height.contains_key(&key(c)) {
+                        stack.push((c, false));
+                    }
+                }
+                continue;
+            }
+            let below = e.children().iter().map(|c| height[&key(c)]).max();
+            let mut h = below.map_or(0, |b| b + 1);
+            if h >= MAX_TREE_DEPTH {
+                self.name(e)?;
+                h = 0;
+            }
+            height.insert(key(e), h);
+        }
+        Ok(())
+    }
+
+    /// Writes `e` now and refers to it by a temporary from then on.
+    fn name(&mut self, e: &Expr) -> Result<(), String> {
+        let (text, depth) = self.emit(e)?;
+        if !self.names.contains_key(&key(e)) && !is_leaf(e) {
+            let name = if depth == 0 && text.starts_with('t') {
+                text
+            } else {
+                self.temp(text)
+            };
+            self.names.insert(key(e), name);
+        }
+        Ok(())
     }
 
     fn temp(&mut self, text: String) -> String {

@@ -137,7 +137,23 @@ fn statements_and_arrays() {
 #[test]
 fn unassigned_names_and_objects() {
     let d = err(&model("my_model = zz + 1;"));
-    assert_eq!(d.message, "Unassigned identificator used in expression");
+    assert_eq!(
+        d.message,
+        "Unassigned identificator used in expression: 'zz' is not a variable assigned before \
+         this point"
+    );
+    let d = err(&model("r = 1; my_model = hfSpher(x, x, rr);"));
+    assert_eq!(
+        d.message,
+        "Unassigned identificator used in expression: 'hfspher' is not a known function or an \
+         object defined above (did you mean hfSphere?)"
+    );
+    let d = err(&model("radius = 1; my_model = radiu;"));
+    assert!(
+        d.message.ends_with("(did you mean radius?)"),
+        "{}",
+        d.message
+    );
     // Assignment in an untaken branch still counts (textual order).
     ok(&model("if x[1] > 0 then y = 1; endif; my_model = y;"));
     err(&model(
@@ -149,21 +165,44 @@ fn unassigned_names_and_objects() {
     let d = err("h(x[3], a[2], s[2]) { h = 1; } my_model(x[3], a[2]) { my_model = h(x, a); }");
     assert_eq!(d.message, "Wrong number of items in array");
     let d = err(&model("my_model = my_model;"));
-    assert_eq!(d.message, "Unassigned identificator used in expression");
+    assert_eq!(
+        d.message,
+        "Unassigned identificator used in expression: 'my_model' is the object being defined; \
+         it cannot use its own value"
+    );
 }
 
 #[test]
 fn calls_check_arity_and_array_arguments() {
     assert_eq!(
         err(&model("my_model = sqrt(1, 2);")).message,
-        "Right parenthes expected"
+        "Right parenthes expected: too many arguments to sqrt: expected 1, got 2"
     );
-    assert_eq!(err(&model("my_model = max(1);")).message, "Comma expected");
+    assert_eq!(
+        err(&model("my_model = hfSphere(x, x, 1, (2, 3), 4);")).message,
+        "Right parenthes expected: too many arguments to hfSphere: expected 3, got 5"
+    );
+    assert_eq!(
+        err(&model("my_model = max(1);")).message,
+        "Comma expected: too few arguments to max: expected 2, got 1"
+    );
+    assert_eq!(
+        err(&model("my_model = max(1 2);")).message,
+        "Comma expected"
+    );
     let d = err(&model("my_model = hfSphere(x, 2, 1);"));
     assert_eq!(
         (d.message.as_str(), d.pos.col),
-        ("Error in argument in function call", 47)
+        (
+            "Error in argument in function call: argument 2 of hfSphere must be the name of an \
+             array (x, a, s or a declared array)",
+            47
+        )
     );
+    let d = err("h(x[3], a[2]) { h = 1; } my_model(x[3], a[2]) { my_model = h(x, a, s, x); }");
+    assert!(d
+        .message
+        .starts_with("Right parenthes expected: too many arguments to object 'h'"));
     assert_eq!(
         err(&model("my_model = - - 1;")).message,
         "Second unary minus is not allowed"
@@ -186,7 +225,11 @@ fn all_recoverable_errors_are_reported() {
         at,
         [
             (2, "Expression expected"),
-            (3, "Unassigned identificator used in expression"),
+            (
+                3,
+                "Unassigned identificator used in expression: 'q' is not a variable assigned \
+                 before this point"
+            ),
             (4, "Expression expected"),
         ]
     );

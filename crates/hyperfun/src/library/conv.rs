@@ -105,9 +105,17 @@ fn conv_triangle(a: &[Arg]) -> Output {
 fn conv_mesh(a: &[Arg]) -> Output {
     let (v, tri, s) = (a[1].array(), a[2].array(), a[3].array());
     let mut idx = Vec::new();
-    for t in tri {
+    let nv = v.len() / 3;
+    for (k, t) in tri.iter().enumerate() {
         match t.as_const() {
-            Some(i) => idx.push(i.trunc()),
+            Some(i) if i.trunc() >= 1.0 && i.trunc() <= nv as f64 => idx.push(i.trunc()),
+            Some(i) => {
+                return Output::error(format!(
+                    "element {} of argument 3 (the triangles) is {i}, not a vertex index \
+                     from 1 to {nv}",
+                    k + 1
+                ))
+            }
             // Vertex indices must be known to pick the vertices.
             None => return Output::needs_constants(),
         }

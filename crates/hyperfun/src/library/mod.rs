@@ -16,6 +16,7 @@ mod dellipsoid;
 mod extend;
 mod prims;
 mod sardef;
+pub mod shapes;
 mod transforms;
 
 pub use extend::{add_extension, extensions, Extension};

@@ -220,15 +220,26 @@ fn d_torus<const K: usize>(a: &[Arg]) -> Output {
     }))
 }
 
+/// Most terms a Fourier sawtooth may have (each is a few graph nodes).
+pub const MAX_SAWTOOTH_TERMS: f64 = 100_000.0;
+
 /// Fourier sawtooth; the term count must be known when the model is built.
 fn sawtooth(a: &[Arg]) -> Output {
     let n = a[1].real().as_const().map(|n| n.trunc());
     let value = match n {
+        Some(n) if n.is_nan() => {
+            return Output::error("the term count (argument 2) is not a number")
+        }
         Some(n) if n <= 1.0 => Expr::constant(0.0),
+        Some(n) if n > MAX_SAWTOOTH_TERMS => {
+            return Output::error(format!(
+            "the term count (argument 2) is {n}; at most {MAX_SAWTOOTH_TERMS} terms are supported"
+        ))
+        }
         Some(n) => {
             let (t, f) = (a[0].real(), a[3].real());
             let mut sum = Expr::constant(0.0);
-            for k in 1..(n.min(1e4) as i64) {
+            for k in 1..(n as i64) {
                 let k = k as f64;
                 sum = sum + (2.0 * PI * k * &f * &t).sin() / k;
             }
@@ -298,9 +309,22 @@ fn bezier_volume(a: &[Arg]) -> Output {
     for (k, c) in counts.iter_mut().enumerate() {
         match a[k + 1].real().as_const() {
             Some(v) if (1.0..=20.0).contains(&v.trunc()) => *c = v.trunc() as usize,
-            Some(_) => return Output::value(Expr::constant(f64::NAN)),
+            Some(v) => {
+                return Output::error(format!(
+                    "the control count {} (argument {}) is {v}; it must be from 1 to 20",
+                    ["l", "m", "n"][k],
+                    k + 2
+                ))
+            }
             None => return Output::needs_constants(),
         }
+    }
+    let need = counts.iter().product::<usize>();
+    let got = a[5].array().len();
+    if got != need {
+        return Output::error(format!(
+            "argument 6 (the control values) has {got} elements; it must have l*m*n = {need}"
+        ));
     }
     Output::value(point3(a, |p| {
         let (bb, w) = (a[4].array(), a[5].array());

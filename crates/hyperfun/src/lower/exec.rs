@@ -10,8 +10,13 @@ use crate::library::{Arg, Kind, Registry, EPS};
 use microfrep_core::Expr;
 use std::collections::HashMap;
 
-/// Loop iterations allowed in one evaluation (the reference would hang).
+/// Loop iterations allowed when a model is lowered (once, at load; the
+/// reference would hang). Loops whose trip count is fixed run here, e.g. a
+/// loop building a union of 100k spheres.
 pub const LOOP_BUDGET: u64 = 1_000_000;
+/// Loop iterations allowed per point in the per-point fallback: 100 times
+/// the iterations of a heavy escape-time fractal, about 0.2 s of work.
+pub const POINT_LOOP_BUDGET: u64 = 100_000;
 
 /// Why a model cannot become one expression graph.
 #[derive(Debug, Clone, PartialEq)]
@@ -82,10 +87,22 @@ pub struct Exec<'p> {
     /// Truth value of "this statement runs" (inside point-dependent `if`s).
     guard: Expr,
     budget: u64,
+    /// Set when a loop ran out of iterations.
+    pub limit_hit: bool,
 }
 
 impl<'p> Exec<'p> {
     pub fn new(program: &'p Program, registry: &'p Registry, table: &'p ErrorTable) -> Self {
+        Self::with_budget(program, registry, table, LOOP_BUDGET)
+    }
+
+    /// An executor allowing `budget` loop iterations in all.
+    pub fn with_budget(
+        program: &'p Program,
+        registry: &'p Registry,
+        table: &'p ErrorTable,
+        budget: u64,
+    ) -> Self {
         Exec {
             program,
             registry,
@@ -93,7 +110,8 @@ impl<'p> Exec<'p> {
             err: c(0.0),
             sites: Vec::new(),
             guard: c(1.0),
-            budget: LOOP_BUDGET,
+            budget,
+            limit_hit: false,
         }
     }
 
@@ -156,6 +174,10 @@ impl<'p> Exec<'p> {
     }
 
     fn stmt(&mut self, s: &Stmt, env: &mut Env) -> Result<(), Stop> {
+        grow(|| self.stmt_inner(s, env))
+    }
+
+    fn stmt_inner(&mut self, s: &Stmt, env: &mut Env) -> Result<(), Stop> {
         match s {
             Stmt::Assign { name, value, .. } => {
                 let v = self.expr(value, env)?;
@@ -209,6 +231,7 @@ impl<'p> Exec<'p> {
                     Some(_) => {}
                 }
                 if self.budget == 0 {
+                    self.limit_hit = true;
                     self.fault(c(1.0), ops::LOOP_LIMIT, *pos);
                     break;
                 }
@@ -255,32 +278,45 @@ impl<'p> Exec<'p> {
     }
 
     fn cond(&mut self, cond: &Cond, env: &mut Env) -> Result<Expr, Stop> {
-        Ok(match cond {
-            Cond::Value(e) => ops::truth(&self.expr(e, env)?),
-            Cond::Not(a) => self.cond(a, env)?.not(),
-            Cond::Cmp(op, a, b) => {
-                let b = self.cond_value(b, env)?;
-                let a = self.cond_value(a, env)?;
-                match op {
-                    CmpOp::Lt => a.lt(b),
-                    CmpOp::Gt => a.gt(b),
-                    CmpOp::Le => a.le(b),
-                    CmpOp::Ge => a.ge(b),
-                    CmpOp::Eq => (a - b).abs().lt(EPS),
-                    CmpOp::Ne => (a - b).abs().ge(EPS),
+        // `and`, `or` and comparisons chain to the left without limit
+        // (`c1 and c2 and ...`): the chain is walked in a loop, right
+        // operands first as the reference evaluates them.
+        let (mut spine, mut rights) = (Vec::new(), Vec::new());
+        let mut cur = cond;
+        while let Cond::Cmp(_, a, b) | Cond::And(a, b) | Cond::Or(a, b) = cur {
+            spine.push(cur);
+            let right = match cur {
+                Cond::Cmp(..) => self.cond_value(b, env)?,
+                _ => self.cond(b, env)?,
+            };
+            rights.push(right);
+            cur = a;
+        }
+        let mut acc = match (spine.last(), cur) {
+            (_, Cond::Not(a)) => self.cond(a, env)?.not(),
+            (Some(Cond::Cmp(..)), Cond::Value(e)) => self.expr(e, env)?,
+            (_, Cond::Value(e)) => ops::truth(&self.expr(e, env)?),
+            (_, Cond::Cmp(..) | Cond::And(..) | Cond::Or(..)) => unreachable!("walked above"),
+        };
+        for (node, b) in spine.iter().zip(rights).rev() {
+            acc = match node {
+                Cond::Cmp(op, ..) => {
+                    let a = acc;
+                    match op {
+                        CmpOp::Lt => a.lt(b),
+                        CmpOp::Gt => a.gt(b),
+                        CmpOp::Le => a.le(b),
+                        CmpOp::Ge => a.ge(b),
+                        CmpOp::Eq => (a - b).abs().lt(EPS),
+                        CmpOp::Ne => (a - b).abs().ge(EPS),
+                    }
                 }
-            }
-            Cond::And(a, b) => {
-                let b = self.cond(b, env)?;
-                let a = self.cond(a, env)?;
-                a.and(b)
-            }
-            Cond::Or(a, b) => {
-                let b = self.cond(b, env)?;
-                let a = self.cond(a, env)?;
-                a.or(b)
-            }
-        })
+                Cond::And(..) => acc.and(b),
+                Cond::Or(..) => acc.or(b),
+                Cond::Value(_) | Cond::Not(_) => unreachable!("spine nodes are binary"),
+            };
+        }
+        Ok(acc)
     }
 
     /// A comparison operand: a plain value, or the 0/1 value of a condition.
@@ -315,6 +351,52 @@ impl<'p> Exec<'p> {
     }
 
     fn expr(&mut self, e: &ast::Expr, env: &mut Env) -> Result<Expr, Stop> {
+        grow(|| self.expr_inner(e, env))
+    }
+
+    fn expr_inner(&mut self, e: &ast::Expr, env: &mut Env) -> Result<Expr, Stop> {
+        // Operators chain to the left without limit (a generated union of
+        // 100k spheres): the chain is walked in a loop, right operands
+        // first (top down) as the reference evaluates them, then the
+        // leftmost operand, then the operators bottom up. Everything else
+        // nests only as deep as the parser allows.
+        let (mut spine, mut rights) = (Vec::new(), Vec::new());
+        let mut cur = e;
+        while let ExprKind::Binary(op, a, b) = &cur.kind {
+            spine.push((*op, cur.pos));
+            rights.push(self.expr(b, env)?);
+            cur = a;
+        }
+        let mut acc = self.operand(cur, env)?;
+        for ((op, pos), b) in spine.into_iter().zip(rights).rev() {
+            acc = self.binary(op, acc, b, pos);
+        }
+        Ok(acc)
+    }
+
+    fn binary(&mut self, op: BinOp, a: Expr, b: Expr, pos: Pos) -> Expr {
+        match op {
+            BinOp::Add => a + b,
+            BinOp::Sub => a - b,
+            BinOp::Mul => a * b,
+            BinOp::Div => {
+                let (v, f) = ops::div(&a, &b);
+                self.faults(f, pos);
+                v
+            }
+            BinOp::Pow => {
+                let (v, f) = ops::pow(&a, &b);
+                self.faults(f, pos);
+                v
+            }
+            BinOp::Union => ops::union(&a, &b),
+            BinOp::Intersection | BinOp::Product => ops::intersection(&a, &b),
+            BinOp::Subtraction => ops::subtraction(&a, &b),
+        }
+    }
+
+    /// An expression that is not a binary operation.
+    fn operand(&mut self, e: &ast::Expr, env: &mut Env) -> Result<Expr, Stop> {
         let pos = e.pos;
         Ok(match &e.kind {
             ExprKind::Num(v) => c(*v),
@@ -339,28 +421,7 @@ impl<'p> Exec<'p> {
                     UnOp::Neg | UnOp::Complement => -a,
                 }
             }
-            ExprKind::Binary(op, a, b) => {
-                let b = self.expr(b, env)?;
-                let a = self.expr(a, env)?;
-                match op {
-                    BinOp::Add => a + b,
-                    BinOp::Sub => a - b,
-                    BinOp::Mul => a * b,
-                    BinOp::Div => {
-                        let (v, f) = ops::div(&a, &b);
-                        self.faults(f, pos);
-                        v
-                    }
-                    BinOp::Pow => {
-                        let (v, f) = ops::pow(&a, &b);
-                        self.faults(f, pos);
-                        v
-                    }
-                    BinOp::Union => ops::union(&a, &b),
-                    BinOp::Intersection | BinOp::Product => ops::intersection(&a, &b),
-                    BinOp::Subtraction => ops::subtraction(&a, &b),
-                }
-            }
+            ExprKind::Binary(..) => return self.expr(e, env),
             ExprKind::Call(name, args) => return self.call(name, args, pos, env),
         })
     }
@@ -394,7 +455,8 @@ impl<'p> Exec<'p> {
                 return Err(Stop::NeedsPoint);
             }
             if let Some(m) = out.error {
-                return Err(Stop::Static(format!("{name}: {m}"), pos));
+                let shown = crate::library::shapes::display_name(name);
+                return Err(Stop::Static(format!("{shown}: {m}"), pos));
             }
             for (k, v) in out.writes {
                 if let ExprKind::Var(n) = &args[k].kind {
@@ -478,6 +540,19 @@ impl<'p> Exec<'p> {
         Ok(v)
     }
 }
+
+/// Runs `f` with at least [`RED_ZONE`] bytes of stack, moving to a fresh
+/// segment on the heap when the current one runs low: nesting through
+/// calls and objects has no fixed bound, and the per-point fallback runs
+/// on whatever thread evaluates the model.
+pub(crate) fn grow<R>(f: impl FnOnce() -> R) -> R {
+    stacker::maybe_grow(RED_ZONE, STACK_SEGMENT, f)
+}
+
+/// Stack left before a recursive step moves to a new segment.
+const RED_ZONE: usize = 128 * 1024;
+/// Size of each new stack segment.
+const STACK_SEGMENT: usize = 2 * 1024 * 1024;
 
 /// Coordinates or parameters padded (or cut) to the declared size.
 fn fit(v: Vec<Expr>, n: usize) -> Vec<Slot> {

@@ -7,6 +7,7 @@
 //! per-point fallback (same executor, constant inputs) wrapped as a `Field`.
 
 mod census;
+mod check;
 mod errors;
 mod exec;
 mod fallback;
@@ -20,6 +21,7 @@ pub use usage::calls_of;
 
 use crate::ast::{Pos, Program};
 use crate::library::Registry;
+pub(crate) use exec::grow;
 use exec::{Exec, Inputs, Stop};
 use microfrep_core::{Expr, PointEval, Shape, Tape};
 use std::sync::Arc;
@@ -46,6 +48,8 @@ pub struct Model {
     /// False when the model runs through the per-point fallback (parameters
     /// are then fixed at load time and intervals are unbounded).
     pub lowered: bool,
+    /// The per-point interpreter, when `lowered` is false.
+    interp: Option<Arc<fallback::Interp>>,
 }
 
 /// A static error found while lowering (message, position).
@@ -76,11 +80,14 @@ pub fn select_object(program: &Program, name: Option<&str>) -> Option<usize> {
 }
 
 /// Picks the object (`name`, default `my_model`, else the first) and lowers
-/// it with parameters `a[1..] = params`.
+/// it with parameters given as `(k, value)` pairs for `a[k]` (1-based; a
+/// later pair for the same `k` wins, unset ones are 0). Every index is
+/// checked against the object's declared `a[N]` and every value must be
+/// finite, before anything is sized from them.
 pub fn load_program(
     program: Arc<Program>,
     name: Option<&str>,
-    params: &[f64],
+    params: &[(usize, f64)],
 ) -> Result<Model, LowerError> {
     let Some(i) = select_object(&program, name) else {
         return Err(LowerError {
@@ -91,7 +98,37 @@ pub fn load_program(
             pos: Pos::default(),
         });
     };
-    lower(program, i, &Registry::standard(), params)
+    let dense = dense_params(&program.objects[i], params)?;
+    lower(program, i, &Registry::standard(), &dense)
+}
+
+/// `a[1..=N]` of `obj` from `(k, value)` pairs, checked.
+fn dense_params(obj: &crate::ast::Object, params: &[(usize, f64)]) -> Result<Vec<f64>, LowerError> {
+    let error = |message: String| LowerError {
+        message,
+        pos: Pos::default(),
+    };
+    let mut dense = vec![0.0; obj.a_size];
+    for &(k, v) in params {
+        if k == 0 {
+            return Err(error(
+                "parameter index must be 1 or more (a[1] is the first)".into(),
+            ));
+        }
+        if k > obj.a_size {
+            return Err(error(format!(
+                "parameter a[{k}] out of range: object '{}' has a[{}]",
+                obj.name, obj.a_size
+            )));
+        }
+        if !v.is_finite() {
+            return Err(error(format!(
+                "parameter a[{k}] must be a finite number, not {v}"
+            )));
+        }
+        dense[k - 1] = v;
+    }
+    Ok(dense)
 }
 
 /// Lowers object `object` of `program`. `params` gives `a[1..]` (missing
@@ -103,6 +140,7 @@ pub fn lower(
     params: &[f64],
 ) -> Result<Model, LowerError> {
     let obj = &program.objects[object];
+    check::check_calls(&program, object, registry)?;
     let pvals: Vec<f64> = (0..obj.a_size)
         .map(|k| params.get(k).copied().unwrap_or(0.0))
         .collect();
@@ -125,6 +163,7 @@ pub fn lower(
         errors: table.clone(),
         params: names.into_iter().zip(pvals.iter().copied()).collect(),
         lowered: true,
+        interp: None,
     };
     match ex.run(obj, inputs) {
         Ok(value) => {
@@ -143,6 +182,7 @@ pub fn lower(
                 registry: registry.clone(),
                 table,
                 params: pvals,
+                runaway: std::sync::OnceLock::new(),
             });
             let field = |error| {
                 Expr::field(Arc::new(fallback::Output {
@@ -154,6 +194,7 @@ pub fn lower(
                 value: field(false),
                 error: field(true),
                 lowered: false,
+                interp: Some(interp),
                 ..base
             })
         }
@@ -174,6 +215,17 @@ impl Model {
     pub fn shape(&self) -> Shape {
         Shape::new(self.value.clone())
             .with_errors(self.error.clone(), Arc::new(self.errors.clone()))
+    }
+
+    /// The loop that ran out of iterations, once any evaluation of a
+    /// per-point model met one. From then on every evaluation of the model
+    /// reports this error at once (values computed before it are not
+    /// revised), so a consumer that evaluates many points should check this
+    /// afterwards and fail with the error: the model is broken, and which
+    /// points got values first depends on the evaluation order.
+    pub fn runaway_loop(&self) -> Option<RuntimeError> {
+        let code = *self.interp.as_ref()?.runaway.get()?;
+        self.errors.get(code)
     }
 
     /// Value and error code in one tape (outputs 0 and 1).

@@ -40,32 +40,35 @@ fn stmts(ss: &[Stmt], name: &str, out: &mut Vec<Pos>) {
     }
 }
 
-fn cond_(c: &Cond, name: &str, out: &mut Vec<Pos>) {
-    match c {
-        Cond::Value(e) => expr(e, name, out),
-        Cond::Not(a) => cond_(a, name, out),
-        Cond::Cmp(_, a, b) | Cond::And(a, b) | Cond::Or(a, b) => {
-            cond_(a, name, out);
-            cond_(b, name, out);
+fn cond_(root: &Cond, name: &str, out: &mut Vec<Pos>) {
+    // Iterative, in source order: `and` chains can be 100k long.
+    let mut stack = vec![root];
+    while let Some(c) = stack.pop() {
+        match c {
+            Cond::Value(e) => expr(e, name, out),
+            Cond::Not(a) => stack.push(a),
+            Cond::Cmp(_, a, b) | Cond::And(a, b) | Cond::Or(a, b) => stack.extend([&**b, &**a]),
         }
     }
 }
 
-fn expr(e: &Expr, name: &str, out: &mut Vec<Pos>) {
-    match &e.kind {
-        ExprKind::Num(_) | ExprKind::Var(_) => {}
-        ExprKind::Index(_, i) | ExprKind::Unary(_, i) => expr(i, name, out),
-        ExprKind::Binary(_, a, b) => {
-            expr(a, name, out);
-            expr(b, name, out);
-        }
-        ExprKind::Call(f, args) => {
-            if f == name {
-                out.push(e.pos);
-            }
-            for a in args {
-                expr(a, name, out);
+/// Iterative: operator chains in generated models are 100k deep.
+fn expr(root: &Expr, name: &str, out: &mut Vec<Pos>) {
+    let mut found = Vec::new();
+    let mut stack = vec![root];
+    while let Some(e) = stack.pop() {
+        match &e.kind {
+            ExprKind::Num(_) | ExprKind::Var(_) => {}
+            ExprKind::Index(_, i) | ExprKind::Unary(_, i) => stack.push(i),
+            ExprKind::Binary(_, a, b) => stack.extend([&**a, &**b]),
+            ExprKind::Call(f, args) => {
+                if f == name {
+                    found.push(e.pos);
+                }
+                stack.extend(args);
             }
         }
     }
+    found.sort();
+    out.extend(found);
 }
