@@ -13,15 +13,17 @@ use std::fmt;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SignMethod {
     /// [`SignMethod::PseudoNormal`] when the mesh (after orientation repair,
-    /// if enabled) is watertight ([`Topology::is_watertight`]), else
-    /// [`SignMethod::Winding`].
+    /// if enabled) is watertight ([`Topology::is_watertight`]) and no two of
+    /// its triangles cross, else [`SignMethod::Winding`].
     #[default]
     Auto,
     /// Generalized winding number > 1/2 is inside; robust to holes, flips,
     /// soups, non-manifold edges and self-intersections.
     Winding,
     /// Sign of the closest feature's angle-weighted pseudo-normal; exact for
-    /// a watertight mesh without self-intersections, an error otherwise.
+    /// a watertight mesh without self-intersections. Requested explicitly,
+    /// a mesh that is not watertight is an error; self-intersections are
+    /// then not looked for.
     PseudoNormal,
 }
 
@@ -92,6 +94,7 @@ pub struct MeshField {
     sign: Sign,
     topology: Topology,
     flipped: usize,
+    self_intersecting: Option<bool>,
     bbox: [[f64; 3]; 2],
     diag: f64,
     beta: f64,
@@ -106,6 +109,7 @@ impl fmt::Debug for MeshField {
             .field("sign", &self.sign_method())
             .field("topology", &self.topology)
             .field("flipped", &self.flipped)
+            .field("self_intersecting", &self.self_intersecting)
             .finish()
     }
 }
@@ -177,15 +181,29 @@ impl MeshField {
             mesh
         };
         progress(2 * t, total);
+        if opts.sign == SignMethod::PseudoNormal && !topology.is_watertight() {
+            return Err(MeshError::NotWatertight(topology.warnings().join("; ")));
+        }
+        let bvh = Bvh::build(mesh, progress, 2 * t, total);
+        let mut self_intersecting = None;
         let method = match opts.sign {
-            SignMethod::Auto if topology.is_watertight() => SignMethod::PseudoNormal,
-            SignMethod::Auto => SignMethod::Winding,
-            SignMethod::PseudoNormal if !topology.is_watertight() => {
-                return Err(MeshError::NotWatertight(topology.warnings().join("; ")))
+            SignMethod::Auto if topology.is_watertight() => {
+                let corners: Vec<[u32; 3]> = bvh
+                    .original
+                    .iter()
+                    .map(|&o| mesh.triangles[o as usize])
+                    .collect();
+                let crossing = crate::intersect::has_self_intersection(&bvh, &corners);
+                self_intersecting = Some(crossing);
+                if crossing {
+                    SignMethod::Winding
+                } else {
+                    SignMethod::PseudoNormal
+                }
             }
+            SignMethod::Auto => SignMethod::Winding,
             m => m,
         };
-        let bvh = Bvh::build(mesh, progress, 2 * t, total);
         let sign = match method {
             SignMethod::PseudoNormal => pseudo_normals(mesh, &bvh),
             _ => Sign::Winding {
@@ -200,6 +218,7 @@ impl MeshField {
             sign,
             topology,
             flipped,
+            self_intersecting,
             bbox,
             diag: norm(sub(bbox[1], bbox[0])),
             beta: opts.beta,
@@ -222,6 +241,14 @@ impl MeshField {
     /// Triangles flipped by the orientation repair.
     pub fn flipped(&self) -> usize {
         self.flipped
+    }
+
+    /// Whether triangles of the mesh cross each other: tested (through the
+    /// BVH) only for watertight meshes under [`SignMethod::Auto`], where a
+    /// crossing makes the build fall back to the winding number; `None`
+    /// where not tested.
+    pub fn self_intersecting(&self) -> Option<bool> {
+        self.self_intersecting
     }
 
     /// Bounds of the mesh (min, max).

@@ -56,8 +56,9 @@
 //!   oriented, manifold at every vertex, no degenerate triangle), the sign
 //!   is the side of the closest feature's angle-weighted pseudo-normal
 //!   (Baerentzen and Aanaes), which is exact for such a mesh without
-//!   self-intersections (those are not detected; choose
-//!   [`SignMethod::Winding`] for self-intersecting closed meshes). Otherwise
+//!   self-intersections; these are looked for first (pairs of triangles in
+//!   overlapping BVH boxes that cross, by orientation tests), and a
+//!   crossing mesh falls back to the winding number. Otherwise
 //!   the sign is the **generalized winding number** `w > 1/2` (Jacobson et
 //!   al. 2013) computed hierarchically after Barill et al. 2018: each BVH
 //!   node stores the moments of its triangles' normal field up to second
@@ -82,9 +83,10 @@
 //!   clear of the surface (`d - h > 0`, with a margin of 1e-9 diagonal):
 //!   watertight meshes then have one sign over the box (the centre's); for
 //!   the winding number the very approximation that the point evaluation
-//!   uses is enclosed over the box (same far/near decisions, expansions in
-//!   interval arithmetic, near triangles bounded by `2 area h / d^3`, the
-//!   bound of the solid angle's gradient), and the sign is claimed only if
+//!   uses is enclosed over the box (same far/near decisions; each far
+//!   expansion at the centre plus `h` times a bound of its gradient from the
+//!   moment norms; each near triangle's solid angle at the centre plus
+//!   `2 area h / d^3`, the bound of its gradient), and the sign is claimed only if
 //!   that enclosure is clear of 1/2. Otherwise the answer is `[-(d + h),
 //!   d + h]`. Sound for every point of the box, checked by
 //!   [`microfrep_core::field_check::check_field`].
@@ -98,10 +100,13 @@
 //!   error, not an abort. Long builds report progress.
 
 #![warn(missing_docs)]
+// Loops over the three axes index several arrays at once, like the formulas.
+#![allow(clippy::needless_range_loop)]
 
 pub mod bvh;
 mod field;
 pub mod geom;
+mod intersect;
 mod mesh;
 pub mod read;
 pub mod winding;

@@ -35,7 +35,10 @@ struct Moments {
     radius: f64,
 }
 
-fn shift(mo: &Moments, to: [f64; 3]) -> ([f64; 3], [[f64; 3]; 3], [[[f64; 3]; 3]; 3]) {
+/// Vector area, first and second moments.
+type Tensors = ([f64; 3], [[f64; 3]; 3], [[[f64; 3]; 3]; 3]);
+
+fn shift(mo: &Moments, to: [f64; 3]) -> Tensors {
     let s = sub(mo.center, to);
     let mut m = mo.m;
     let mut t = mo.t;
@@ -205,8 +208,8 @@ pub fn build(bvh: &Bvh, beta: f64) -> Vec<Expansion> {
     out
 }
 
-/// Arithmetic shared by the point evaluation (f64) and its enclosure over
-/// a box (intervals), so both follow one formula.
+/// Arithmetic of the expansion formula (kept generic so that other number
+/// types, e.g. f32 or intervals, can share it).
 trait Num: Copy {
     fn k(v: f64) -> Self;
     fn add(self, o: Self) -> Self;
@@ -241,28 +244,26 @@ impl Num for f64 {
     }
 }
 
-impl Num for Interval {
-    fn k(v: f64) -> Self {
-        Interval::point(v)
-    }
-    fn add(self, o: Self) -> Self {
-        Interval::add(self, o)
-    }
-    fn sub(self, o: Self) -> Self {
-        Interval::sub(self, o)
-    }
-    fn mul(self, o: Self) -> Self {
-        Interval::mul(self, o)
-    }
-    fn sq(self) -> Self {
-        self.square()
-    }
-    fn sqrt(self) -> Self {
-        Interval::sqrt(self)
-    }
-    fn recip(self) -> Self {
-        Interval::recip(self)
-    }
+/// Bound of the gradient (with respect to the query) of the expansion's
+/// solid angle at distance `r` or more from its centre:
+/// `2 |N| / r^3 + sqrt(90) |M| / r^4 + sqrt(2520) / 2 |T| / r^5`, with
+/// Frobenius norms; `sqrt(90)` and `sqrt(2520)` are the norms of the second
+/// and third derivative tensors of `F(y) = y / |y|^3` at `|y| = 1` (they do
+/// not depend on the direction).
+fn lipschitz(c: &[f32; 30], r: f64) -> f64 {
+    let sq = |i: usize| (c[i] as f64) * (c[i] as f64);
+    let n = (0..3).map(sq).sum::<f64>().sqrt();
+    let m = (3..12).map(sq).sum::<f64>().sqrt();
+    // Off-diagonal jk entries stand for two tensor entries.
+    let t = (0..3)
+        .map(|i| {
+            let b = 12 + 6 * i;
+            sq(b) + sq(b + 3) + sq(b + 5) + 2.0 * (sq(b + 1) + sq(b + 2) + sq(b + 4))
+        })
+        .sum::<f64>()
+        .sqrt();
+    let r3 = r * r * r;
+    2.0 * n / r3 + 9.4869 * m / (r3 * r) + 25.1 * t / (r3 * r * r)
 }
 
 /// The expansion's solid angle (not divided by 4 pi) at offset
@@ -376,7 +377,9 @@ pub struct QueryBox {
 
 /// Encloses [`winding_number`] over every point of the box, following the
 /// same far/near decisions (where a node is far for some points and near
-/// for others, both outcomes are enclosed). Near triangles are bounded by
+/// for others, both outcomes are enclosed). A far node contributes its
+/// expansion at the centre plus [`lipschitz`] times the half diagonal. Near
+/// triangles are bounded by
 /// their solid angle at the centre plus the largest change over the box,
 /// `2 area h / d^3` (the solid angle's gradient is at most `2 area / d^3`
 /// at distance `d`). `None` when more than `budget` nodes would be needed.
@@ -418,12 +421,18 @@ pub fn winding_interval(
         let exp_iv = if near_all {
             None
         } else {
-            let y = [0, 1, 2].map(|a| Interval::point(e.center[a]).sub(b.iv[a]));
-            let v = expansion_value(&e.c, y);
-            if v.is_nan() || !v.lo.is_finite() || !v.hi.is_finite() {
+            // The expansion at the centre, plus its largest change over the
+            // box: a Lipschitz bound from the norms of the moments and of the
+            // derivatives of F(y) = y / |y|^3 at the nearest distance.
+            if dmin2 <= 0.0 {
                 return None;
             }
-            Some(v)
+            let v = expansion_value(&e.c, sub(e.center, b.c));
+            let spread = lipschitz(&e.c, dmin2.sqrt()) * b.h * (1.0 + 1e-9) + 1e-12;
+            if !(v.is_finite() && spread.is_finite()) {
+                return None;
+            }
+            Some(Interval::new(v - spread, v + spread))
         };
         if far_all {
             return exp_iv;
