@@ -76,8 +76,8 @@
 //!   sign follows the hole's minimal "membrane" (w = 1/2).
 //! * **Gradient**: `s (p - c) / |p - c|` with `c` the closest point and `s`
 //!   the sign; on the surface the inward face normal. A unit vector, so
-//!   [`Field::grad_interval`] is `[-1, 1]` per component.
-//! * **Intervals** ([`Field::interval`]): with `d` the distance at the box
+//!   [`microfrep_core::Field::grad_interval`] is `[-1, 1]` per component.
+//! * **Intervals** ([`microfrep_core::Field::interval`]): with `d` the distance at the box
 //!   centre and `h` the half diagonal, `|f|` lies in `[d - h, d + h]`
 //!   (distance is 1-Lipschitz). The sign is claimed only when the box keeps
 //!   clear of the surface (`d - h > 0`, with a margin of 1e-9 diagonal):
@@ -90,7 +90,7 @@
 //!   that enclosure is clear of 1/2. Otherwise the answer is `[-(d + h),
 //!   d + h]`. Sound for every point of the box, checked by
 //!   [`microfrep_core::field_check::check_field`].
-//! * **Batch** ([`Field::eval_batch`]): one call per block from one thread;
+//! * **Batch** ([`microfrep_core::Field::eval_batch`]): one call per block from one thread;
 //!   each point's search is seeded with the previous point's triangle (its
 //!   distance bounds the search from the start), in f64, so the batch equals
 //!   the point evaluation; only `&self` is used, so blocks run in parallel

@@ -378,7 +378,7 @@ pub struct QueryBox {
 /// Encloses [`winding_number`] over every point of the box, following the
 /// same far/near decisions (where a node is far for some points and near
 /// for others, both outcomes are enclosed). A far node contributes its
-/// expansion at the centre plus [`lipschitz`] times the half diagonal. Near
+/// expansion at the centre plus a bound of its gradient (from the moment norms) times the half diagonal. Near
 /// triangles are bounded by
 /// their solid angle at the centre plus the largest change over the box,
 /// `2 area h / d^3` (the solid angle's gradient is at most `2 area / d^3`
