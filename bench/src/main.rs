@@ -6,6 +6,7 @@ mod analyze;
 mod eval;
 mod hyperfun;
 mod mesh;
+mod parts;
 mod slice;
 mod structures;
 mod threemf;
@@ -38,6 +39,10 @@ const SUITES: &[(&str, &str)] = &[
         "beam-lattice, slice-stack and volumetric 3MF vs STL: file sizes, write times",
     ),
     (
+        "parts",
+        "mesh signed distance queries/s vs libigl, 1M-triangle BVH build, peak memory",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -57,6 +62,7 @@ fn main() {
         "analyze" => analyze::run(),
         "eval" => eval::run(),
         "mesh" => mesh::run(),
+        "parts" => parts::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),

@@ -1,0 +1,329 @@
+//! Suite `parts`: triangle meshes as signed distance fields
+//! (microfrep-meshfield) against libigl's `signed_distance` with the fast
+//! winding number sign, on the same mesh and points, 2 threads each (ours: a
+//! rayon pool of 2, one `eval_batch` call per block of 256 points; libigl:
+//! `IGL_NUM_THREADS=2`). Cases: the femur of ../shared/meshes welded
+//! (watertight: pseudo-normal sign) and as read (an unwelded soup: winding
+//! number sign), 200k points uniform in the bbox grown by 10 %; then the BVH
+//! build and the whole field build of a 1M-triangle sphere, and the peak
+//! resident memory of this process (VmHWM) after it. libigl runs from
+//! `target/libigl-venv` (or `MICROFREP_LIBIGL_PYTHON`), created on first
+//! use; its columns read `na` if that fails.
+
+use microfrep_core::Field;
+use microfrep_meshfield::bvh::Bvh;
+use microfrep_meshfield::read::read_mesh;
+use microfrep_meshfield::{BuildOptions, MeshField, SignMethod, TriMesh};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+const POINTS: usize = 200_000;
+const SCRIPT: &str = "crates/meshfield/tests/libigl_sd.py";
+
+pub fn run() -> Result<(), String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .map_err(|e| e.to_string())?;
+    let dir = PathBuf::from("target/parts-bench");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let python = libigl_python(&dir);
+    let femur = Path::new("../shared/meshes/femur.stl");
+    if femur.exists() {
+        let raw = read_mesh(femur).map_err(|e| e.to_string())?;
+        let welded = raw.weld(0.0).0;
+        for (tag, mesh) in [("femur", &welded), ("femur_soup", &raw)] {
+            queries(&pool, &dir, python.as_deref(), tag, mesh)?;
+        }
+    } else {
+        eprintln!("bench/run parts: ../shared/meshes/femur.stl not found; query cases skipped");
+    }
+    build_1m(&pool)
+}
+
+/// Splitmix64 points uniform in the bbox grown by 10 %.
+fn points(m: &TriMesh, n: usize) -> Vec<[f64; 3]> {
+    let [lo, hi] = m.bbox();
+    let mut s = 0x1234_5678u64;
+    let mut unit = || {
+        s = s.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| {
+            [0, 1, 2].map(|a| {
+                let w = hi[a] - lo[a];
+                // On the f32 grid, so both sides see the same points.
+                (lo[a] - 0.1 * w + 1.2 * w * unit()) as f32 as f64
+            })
+        })
+        .collect()
+}
+
+fn queries(
+    pool: &rayon::ThreadPool,
+    dir: &Path,
+    python: Option<&Path>,
+    tag: &str,
+    mesh: &TriMesh,
+) -> Result<(), String> {
+    let t = Instant::now();
+    let field = pool
+        .install(|| MeshField::build(mesh, &BuildOptions::default(), &|_, _| {}))
+        .map_err(|e| e.to_string())?;
+    let build_s = t.elapsed().as_secs_f64();
+    let pts = points(mesh, POINTS);
+    let (x, y, z): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+        pts.iter().map(|p| p[0] as f32).collect(),
+        pts.iter().map(|p| p[1] as f32).collect(),
+        pts.iter().map(|p| p[2] as f32).collect(),
+    );
+    let mut out = vec![0f32; POINTS];
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let t = Instant::now();
+        pool.install(|| {
+            out.par_chunks_mut(256).enumerate().for_each(|(i, o)| {
+                let r = i * 256..i * 256 + o.len();
+                field.eval_batch(&x[r.clone()], &y[r.clone()], &z[r], o);
+            })
+        });
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    let ours_qps = POINTS as f64 / best;
+    // Point path, one thread, for reference.
+    let t = Instant::now();
+    let n1 = 20_000;
+    let mut acc = 0.0;
+    for p in &pts[..n1] {
+        acc += field.eval(*p);
+    }
+    let point_qps = n1 as f64 / t.elapsed().as_secs_f64();
+    std::hint::black_box(acc);
+    let theirs = python.and_then(|py| match libigl(py, dir, tag, mesh, &pts) {
+        Ok(r) => Some(r),
+        Err(e) => {
+            eprintln!("bench/run parts: libigl failed: {e}");
+            None
+        }
+    });
+    // Agreement: sign and distance (libigl's magnitudes in this mode are
+    // approximate; the sign is compared where |d| > 1e-3 diagonal).
+    let diag = mesh.diagonal();
+    let agree = theirs.as_ref().map(|(_, s)| {
+        let (mut n, mut same) = (0, 0);
+        for i in 0..POINTS {
+            if (out[i] as f64).abs() > 1e-3 * diag {
+                n += 1;
+                same += ((out[i] > 0.0) == (s[i] > 0.0)) as usize;
+            }
+        }
+        same as f64 / n as f64
+    });
+    let igl_qps = theirs.as_ref().map(|(q, _)| *q);
+    println!(
+        "RESULT parts_queries_{tag} triangles={} sign={:?} points={POINTS} threads=2 \
+         microfrep_qps={ours_qps:.0} libigl_qps={} ratio={} microfrep_point_qps_1thread={point_qps:.0} \
+         microfrep_build_s={build_s:.4} sign_agreement={}",
+        mesh.triangles.len(),
+        field.sign_method(),
+        fmt(igl_qps, 0),
+        fmt(igl_qps.map(|q| ours_qps / q), 2),
+        fmt(agree, 5),
+    );
+    Ok(())
+}
+
+fn fmt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("na".to_string(), |v| format!("{v:.digits$}"))
+}
+
+/// A UV sphere of radius 50 with about `n` triangles.
+fn fine_sphere(n: usize) -> TriMesh {
+    let k = ((n as f64 / 2.0).sqrt()) as usize;
+    let (nu, nv) = (k, k);
+    let mut v = vec![[0.0, 0.0, -50.0], [0.0, 0.0, 50.0]];
+    for j in 1..nv {
+        let th = std::f64::consts::PI * j as f64 / nv as f64;
+        for i in 0..nu {
+            let ph = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
+            v.push([
+                50.0 * th.sin() * ph.cos(),
+                50.0 * th.sin() * ph.sin(),
+                -50.0 * th.cos(),
+            ]);
+        }
+    }
+    let id = |i: usize, j: usize| (2 + (j - 1) * nu + i % nu) as u32;
+    let mut t = Vec::new();
+    for i in 0..nu {
+        t.push([0, id(i + 1, 1), id(i, 1)]);
+        t.push([1, id(i, nv - 1), id(i + 1, nv - 1)]);
+        for j in 1..nv - 1 {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let mut m = TriMesh::new(v, t).expect("sphere");
+    if m.volume() < 0.0 {
+        for tri in &mut m.triangles {
+            tri.swap(1, 2);
+        }
+    }
+    m
+}
+
+fn build_1m(pool: &rayon::ThreadPool) -> Result<(), String> {
+    let mesh = fine_sphere(1_000_000);
+    let n = mesh.triangles.len();
+    let mut bvh_s = f64::INFINITY;
+    let mut depth = 0;
+    let mut nodes = 0;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let bvh = pool.install(|| Bvh::build(&mesh, &|_, _| {}, 0, n as u64));
+        bvh_s = bvh_s.min(t.elapsed().as_secs_f64());
+        depth = bvh.depth();
+        nodes = bvh.nodes.len();
+    }
+    let before = peak_mib();
+    let t = Instant::now();
+    let field = pool
+        .install(|| MeshField::build(&mesh, &BuildOptions::default(), &|_, _| {}))
+        .map_err(|e| e.to_string())?;
+    let field_s = t.elapsed().as_secs_f64();
+    let sign = field.sign_method();
+    drop(field);
+    let t = Instant::now();
+    let opts = BuildOptions {
+        sign: SignMethod::Winding,
+        ..Default::default()
+    };
+    let wfield = pool
+        .install(|| MeshField::build(&mesh, &opts, &|_, _| {}))
+        .map_err(|e| e.to_string())?;
+    let winding_s = t.elapsed().as_secs_f64();
+    std::hint::black_box(wfield.eval([1.0, 2.0, 3.0]));
+    drop(wfield);
+    println!(
+        "RESULT parts_build_1m triangles={n} threads=2 bvh_build_s={bvh_s:.3} bvh_nodes={nodes} \
+         bvh_depth={depth} field_build_s={field_s:.3} field_sign={sign:?} winding_field_build_s={winding_s:.3} \
+         peak_mib={:.0} peak_before_fields_mib={before:.0} predicted_pseudo_mib={} predicted_winding_mib={}",
+        peak_mib(),
+        MeshField::predict_memory(n as u64, mesh.vertices.len() as u64, SignMethod::PseudoNormal) >> 20,
+        MeshField::predict_memory(n as u64, mesh.vertices.len() as u64, SignMethod::Winding) >> 20,
+    );
+    Ok(())
+}
+
+/// Peak resident memory of this process (VmHWM), MiB.
+fn peak_mib() -> f64 {
+    let s = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    s.lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+        .map_or(f64::NAN, |kib| kib / 1024.0)
+}
+
+/// libigl's queries per second and signed values (positive inside).
+fn libigl(
+    py: &Path,
+    dir: &Path,
+    tag: &str,
+    m: &TriMesh,
+    pts: &[[f64; 3]],
+) -> Result<(f64, Vec<f64>), String> {
+    let w = |name: &str, bytes: Vec<u8>| -> Result<PathBuf, String> {
+        let p = dir.join(format!("{tag}.{name}"));
+        std::fs::write(&p, bytes).map_err(|e| e.to_string())?;
+        Ok(p)
+    };
+    let v = w(
+        "v",
+        m.vertices
+            .iter()
+            .flatten()
+            .flat_map(|c| c.to_le_bytes())
+            .collect(),
+    )?;
+    let f = w(
+        "f",
+        m.triangles
+            .iter()
+            .flatten()
+            .flat_map(|&i| (i as i64).to_le_bytes())
+            .collect(),
+    )?;
+    let p = w(
+        "p",
+        pts.iter().flatten().flat_map(|c| c.to_le_bytes()).collect(),
+    )?;
+    let o = dir.join(format!("{tag}.s"));
+    let out = Command::new(py)
+        .arg(SCRIPT)
+        .args([&v, &f, &p, &o])
+        .arg("3")
+        .env("IGL_NUM_THREADS", "2")
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let at = text.find("\"qps\":").ok_or("no qps in libigl output")? + 6;
+    let rest = text[at..].trim_start();
+    let qps: f64 = rest[..rest.find([',', '}']).unwrap_or(rest.len())]
+        .trim()
+        .parse()
+        .map_err(|e| format!("{e}"))?;
+    let s = std::fs::read(&o)
+        .map_err(|e| e.to_string())?
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    Ok((qps, s))
+}
+
+/// The Python with libigl: `MICROFREP_LIBIGL_PYTHON`, or the venv under
+/// target/, created on first use.
+fn libigl_python(dir: &Path) -> Option<PathBuf> {
+    if let Ok(p) = std::env::var("MICROFREP_LIBIGL_PYTHON") {
+        return Some(PathBuf::from(p));
+    }
+    let venv = PathBuf::from("target/libigl-venv");
+    let py = venv.join("bin/python");
+    let has = |py: &Path| {
+        Command::new(py)
+            .args(["-c", "import igl, numpy"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if has(&py) {
+        return Some(py);
+    }
+    eprintln!("bench/run parts: installing libigl into {}", venv.display());
+    let log = dir.join("libigl-install.log");
+    let ok = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "python3 -m venv {v} && {v}/bin/pip install libigl numpy > {l} 2>&1",
+            v = venv.display(),
+            l = log.display()
+        ))
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok && has(&py) {
+        Some(py)
+    } else {
+        eprintln!(
+            "bench/run parts: libigl not available (see {}); its columns read na",
+            log.display()
+        );
+        None
+    }
+}

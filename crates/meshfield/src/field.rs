@@ -1,0 +1,503 @@
+//! [`MeshField`]: a triangle mesh as a signed distance field of the core.
+
+use crate::bvh::{self, Bvh, Hit};
+use crate::geom::{unit_normal, Feature};
+use crate::mesh::{dot, norm, sub, Topology, TriMesh};
+use crate::winding::{self, Expansion, QueryBox};
+use crate::MeshError;
+use microfrep_core::{Field, Interval};
+use rayon::prelude::*;
+use std::fmt;
+
+/// How inside and outside are told apart.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SignMethod {
+    /// [`SignMethod::PseudoNormal`] when the mesh (after orientation repair,
+    /// if enabled) is watertight ([`Topology::is_watertight`]) and no two of
+    /// its triangles cross, else [`SignMethod::Winding`].
+    #[default]
+    Auto,
+    /// Generalized winding number > 1/2 is inside; robust to holes, flips,
+    /// soups, non-manifold edges and self-intersections.
+    Winding,
+    /// Sign of the closest feature's angle-weighted pseudo-normal; exact for
+    /// a watertight mesh without self-intersections. Requested explicitly,
+    /// a mesh that is not watertight is an error; self-intersections are
+    /// then not looked for.
+    PseudoNormal,
+}
+
+/// Options of [`MeshField::build`].
+#[derive(Clone, Debug)]
+pub struct BuildOptions {
+    /// Name for diagnostics.
+    pub name: String,
+    /// Sign rule.
+    pub sign: SignMethod,
+    /// Far-field parameter of the fast winding number: a node's expansion is
+    /// used at distances above `beta` times its radius (Barill et al. use 2;
+    /// larger is more accurate and slower).
+    pub beta: f64,
+    /// Make the orientation consistent across manifold edges first
+    /// ([`TriMesh::orient`]); flipped triangles then cost nothing.
+    pub orient: bool,
+    /// Most bytes the build may use ([`MeshField::predict_memory`]).
+    pub memory_limit: u64,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            name: "mesh".into(),
+            sign: SignMethod::Auto,
+            beta: 2.0,
+            orient: true,
+            memory_limit: crate::memory::default_limit(),
+        }
+    }
+}
+
+enum Sign {
+    Pseudo {
+        /// Across each edge of each triangle (leaf order), the neighbour
+        /// (leaf order).
+        neighbours: Vec<[u32; 3]>,
+        /// Mesh vertex of each corner (leaf order).
+        corners: Vec<[u32; 3]>,
+        /// Angle-weighted vertex normals.
+        vertex_normals: Vec<[f64; 3]>,
+    },
+    Winding {
+        expansions: Vec<Expansion>,
+    },
+}
+
+/// The closest point of the mesh to a query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closest {
+    /// The point.
+    pub point: [f64; 3],
+    /// Its distance from the query.
+    pub distance: f64,
+    /// Triangle of the input mesh.
+    pub triangle: usize,
+    /// Where on the triangle.
+    pub feature: Feature,
+}
+
+/// A triangle mesh as a signed distance field: `+distance` inside,
+/// `-distance` outside (millimetres), gradients, sound interval bounds and a
+/// fast batch path. See the crate documentation for the guarantees.
+pub struct MeshField {
+    name: String,
+    bvh: Bvh,
+    sign: Sign,
+    topology: Topology,
+    flipped: usize,
+    self_intersecting: Option<bool>,
+    bbox: [[f64; 3]; 2],
+    diag: f64,
+    beta: f64,
+}
+
+impl fmt::Debug for MeshField {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("MeshField")
+            .field("name", &self.name)
+            .field("triangles", &self.bvh.tris.len())
+            .field("nodes", &self.bvh.nodes.len())
+            .field("sign", &self.sign_method())
+            .field("topology", &self.topology)
+            .field("flipped", &self.flipped)
+            .field("self_intersecting", &self.self_intersecting)
+            .finish()
+    }
+}
+
+/// Nodes a box's winding-number bound may visit before answering "either".
+const INTERVAL_BUDGET: usize = 4000;
+
+impl MeshField {
+    /// Builds with the default options and no progress report.
+    pub fn new(mesh: &TriMesh) -> Result<MeshField, MeshError> {
+        MeshField::build(mesh, &BuildOptions::default(), &|_, _| {})
+    }
+
+    /// Bytes a build needs at most for a mesh of this size.
+    pub fn predict_memory(triangles: u64, vertices: u64, sign: SignMethod) -> u64 {
+        let t = triangles;
+        // Topology and orientation: half-edges 48 t, pairs and adjacency
+        // 60 t, a repaired copy 12 t + 24 v.
+        let common = t.saturating_mul(120) + vertices.saturating_mul(24);
+        let sign_bytes = match sign {
+            // Pseudo-normals: neighbours and corners 24 t, vertex normals 24 v.
+            SignMethod::PseudoNormal => t.saturating_mul(24) + vertices.saturating_mul(24),
+            // Expansions: at most 2 t nodes of 152 bytes.
+            _ => t.saturating_mul(2 * 152),
+        };
+        bvh::predict_bytes(t)
+            .saturating_add(common)
+            .saturating_add(sign_bytes)
+    }
+
+    /// Builds the field: topology report, optional orientation repair, BVH,
+    /// sign data. `progress(done, total)` is called along the way (total is
+    /// 4 x triangles). Errors: invalid mesh, more memory than allowed, or
+    /// [`SignMethod::PseudoNormal`] requested for a mesh that is not
+    /// watertight.
+    pub fn build(
+        mesh: &TriMesh,
+        opts: &BuildOptions,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<MeshField, MeshError> {
+        mesh.validate()?;
+        let t = mesh.triangles.len() as u64;
+        let need = MeshField::predict_memory(t, mesh.vertices.len() as u64, opts.sign);
+        if need > opts.memory_limit {
+            return Err(MeshError::TooLarge {
+                triangles: t,
+                need,
+                limit: opts.memory_limit,
+            });
+        }
+        if !(opts.beta.is_finite() && opts.beta >= 1.0) {
+            return Err(MeshError::BadOption(format!(
+                "beta must be finite and at least 1, got {}",
+                opts.beta
+            )));
+        }
+        let total = 4 * t;
+        let mut topology = mesh.topology();
+        progress(t, total);
+        let mut flipped = 0;
+        let repaired;
+        let mesh = if opts.orient && topology.inconsistent_edges > 0 {
+            let mut m = mesh.clone();
+            flipped = m.orient();
+            topology = m.topology();
+            repaired = m;
+            &repaired
+        } else {
+            mesh
+        };
+        progress(2 * t, total);
+        if opts.sign == SignMethod::PseudoNormal && !topology.is_watertight() {
+            return Err(MeshError::NotWatertight(topology.warnings().join("; ")));
+        }
+        let bvh = Bvh::build(mesh, progress, 2 * t, total);
+        let mut self_intersecting = None;
+        let method = match opts.sign {
+            SignMethod::Auto if topology.is_watertight() => {
+                let corners: Vec<[u32; 3]> = bvh
+                    .original
+                    .iter()
+                    .map(|&o| mesh.triangles[o as usize])
+                    .collect();
+                let crossing = crate::intersect::has_self_intersection(&bvh, &corners);
+                self_intersecting = Some(crossing);
+                if crossing {
+                    SignMethod::Winding
+                } else {
+                    SignMethod::PseudoNormal
+                }
+            }
+            SignMethod::Auto => SignMethod::Winding,
+            m => m,
+        };
+        let sign = match method {
+            SignMethod::PseudoNormal => pseudo_normals(mesh, &bvh),
+            _ => Sign::Winding {
+                expansions: winding::build(&bvh, opts.beta),
+            },
+        };
+        progress(total, total);
+        let bbox = mesh.bbox();
+        Ok(MeshField {
+            name: opts.name.clone(),
+            bvh,
+            sign,
+            topology,
+            flipped,
+            self_intersecting,
+            bbox,
+            diag: norm(sub(bbox[1], bbox[0])),
+            beta: opts.beta,
+        })
+    }
+
+    /// The sign rule in use ([`SignMethod::Auto`] resolved).
+    pub fn sign_method(&self) -> SignMethod {
+        match self.sign {
+            Sign::Pseudo { .. } => SignMethod::PseudoNormal,
+            Sign::Winding { .. } => SignMethod::Winding,
+        }
+    }
+
+    /// Topology of the mesh as used (after orientation repair).
+    pub fn topology(&self) -> &Topology {
+        &self.topology
+    }
+
+    /// Triangles flipped by the orientation repair.
+    pub fn flipped(&self) -> usize {
+        self.flipped
+    }
+
+    /// Whether triangles of the mesh cross each other: tested (through the
+    /// BVH) only for watertight meshes under [`SignMethod::Auto`], where a
+    /// crossing makes the build fall back to the winding number; `None`
+    /// where not tested.
+    pub fn self_intersecting(&self) -> Option<bool> {
+        self.self_intersecting
+    }
+
+    /// Bounds of the mesh (min, max).
+    pub fn bbox(&self) -> [[f64; 3]; 2] {
+        self.bbox
+    }
+
+    /// The BVH (for statistics).
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// Far-field parameter in use.
+    pub fn beta(&self) -> f64 {
+        self.beta
+    }
+
+    /// The closest point of the mesh to `p` (exact, f64).
+    pub fn closest(&self, p: [f64; 3]) -> Closest {
+        let h = self.bvh.closest(p, Hit::NONE);
+        Closest {
+            point: h.point,
+            distance: h.d2.sqrt(),
+            triangle: self.bvh.original[h.tri as usize] as usize,
+            feature: h.feature,
+        }
+    }
+
+    /// Unsigned distance to the mesh.
+    pub fn distance(&self, p: [f64; 3]) -> f64 {
+        self.bvh.closest(p, Hit::NONE).d2.sqrt()
+    }
+
+    /// Generalized winding number at `p` (fast, hierarchical), where the
+    /// field was built with [`SignMethod::Winding`].
+    pub fn winding_number(&self, p: [f64; 3]) -> Option<f64> {
+        match &self.sign {
+            Sign::Winding { expansions } => Some(winding::winding_number(&self.bvh, expansions, p)),
+            Sign::Pseudo { .. } => None,
+        }
+    }
+
+    /// Whether `p` is inside (field value > 0, or on the surface).
+    pub fn is_inside(&self, p: [f64; 3]) -> bool {
+        self.eval(p) >= 0.0
+    }
+
+    /// +1 inside, -1 outside, for the point `p` with nearest hit `h`.
+    fn sign_at(&self, p: [f64; 3], h: &Hit) -> f64 {
+        match &self.sign {
+            Sign::Pseudo {
+                neighbours,
+                corners,
+                vertex_normals,
+            } => {
+                let t = h.tri as usize;
+                let n = match h.feature {
+                    Feature::Face => unit_normal(&self.bvh.tris[t]),
+                    Feature::Edge(k) => {
+                        let a = unit_normal(&self.bvh.tris[t]);
+                        let nb = neighbours[t][k as usize];
+                        if nb == u32::MAX {
+                            a
+                        } else {
+                            let b = unit_normal(&self.bvh.tris[nb as usize]);
+                            [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+                        }
+                    }
+                    Feature::Vertex(k) => vertex_normals[corners[t][k as usize] as usize],
+                };
+                if dot(sub(p, h.point), n) > 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                }
+            }
+            Sign::Winding { expansions } => {
+                if winding::winding_number(&self.bvh, expansions, p) > 0.5 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            }
+        }
+    }
+
+    fn value_from(&self, p: [f64; 3], h: &Hit) -> f64 {
+        let d = h.d2.sqrt();
+        if d == 0.0 {
+            return 0.0;
+        }
+        self.sign_at(p, h) * d
+    }
+}
+
+fn pseudo_normals(mesh: &TriMesh, bvh: &Bvh) -> Sign {
+    let n = mesh.triangles.len();
+    let mut leaf_of = vec![0u32; n];
+    for (leaf, &orig) in bvh.original.iter().enumerate() {
+        leaf_of[orig as usize] = leaf as u32;
+    }
+    let nb = mesh.neighbours();
+    let neighbours: Vec<[u32; 3]> = bvh
+        .original
+        .par_iter()
+        .map(|&o| {
+            nb[o as usize].map(|x| {
+                if x == u32::MAX {
+                    x
+                } else {
+                    leaf_of[x as usize]
+                }
+            })
+        })
+        .collect();
+    let corners: Vec<[u32; 3]> = bvh
+        .original
+        .iter()
+        .map(|&o| mesh.triangles[o as usize])
+        .collect();
+    let mut vertex_normals = vec![[0.0; 3]; mesh.vertices.len()];
+    for t in 0..n {
+        let c = mesh.corners(t);
+        let nt = unit_normal(&c);
+        for k in 0..3 {
+            let e1 = sub(c[(k + 1) % 3], c[k]);
+            let e2 = sub(c[(k + 2) % 3], c[k]);
+            let (l1, l2) = (norm(e1), norm(e2));
+            if l1 == 0.0 || l2 == 0.0 {
+                continue;
+            }
+            let angle = (dot(e1, e2) / (l1 * l2)).clamp(-1.0, 1.0).acos();
+            let v = &mut vertex_normals[mesh.triangles[t][k] as usize];
+            for a in 0..3 {
+                v[a] += angle * nt[a];
+            }
+        }
+    }
+    Sign::Pseudo {
+        neighbours,
+        corners,
+        vertex_normals,
+    }
+}
+
+impl Field for MeshField {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn eval(&self, p: [f64; 3]) -> f64 {
+        if p.iter().any(|c| c.is_nan()) {
+            return f64::NAN;
+        }
+        let h = self.bvh.closest(p, Hit::NONE);
+        self.value_from(p, &h)
+    }
+
+    fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        if p.iter().any(|c| c.is_nan()) {
+            return (f64::NAN, [f64::NAN; 3]);
+        }
+        let h = self.bvh.closest(p, Hit::NONE);
+        let d = h.d2.sqrt();
+        if d == 0.0 || !d.is_finite() {
+            // On the surface: the inward face normal.
+            let n = unit_normal(&self.bvh.tris[h.tri as usize]);
+            return (0.0, n.map(|c| -c));
+        }
+        let s = self.sign_at(p, &h);
+        let g = sub(p, h.point).map(|c| s * c / d);
+        (s * d, g)
+    }
+
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        if b.iter().any(|i| i.is_nan()) {
+            return Interval::nan();
+        }
+        if b.iter().any(|i| !(i.lo.is_finite() && i.hi.is_finite())) {
+            return Interval::ENTIRE;
+        }
+        let c = [0, 1, 2].map(|a| b[a].mid());
+        let h = [0, 1, 2]
+            .map(|a| {
+                let r = (b[a].hi - c[a]).max(c[a] - b[a].lo);
+                r * r
+            })
+            .iter()
+            .sum::<f64>()
+            .sqrt()
+            * (1.0 + 1e-12);
+        let d = self.distance(c);
+        let slack = 1e-12 * (self.diag + d + h);
+        let lo = (d - h - slack).max(0.0);
+        let hi = d + h + slack;
+        let either = Interval::new(-hi, hi);
+        // Sign known only where the box keeps clear of the surface.
+        if d - h <= 1e-9 * self.diag + slack {
+            return either;
+        }
+        let inside = match &self.sign {
+            // Closed and oriented: the sign cannot change off the surface.
+            Sign::Pseudo { .. } => Some(self.eval(c) > 0.0),
+            Sign::Winding { expansions } => {
+                let q = QueryBox {
+                    iv: b,
+                    c,
+                    h,
+                    dmin: d - h - slack,
+                };
+                match winding::winding_interval(&self.bvh, expansions, &q, INTERVAL_BUDGET) {
+                    Some(w) if w.lo > 0.5 => Some(true),
+                    Some(w) if w.hi <= 0.5 => Some(false),
+                    _ => None,
+                }
+            }
+        };
+        match inside {
+            Some(true) => Interval::new(lo, hi),
+            Some(false) => Interval::new(-hi, -lo),
+            None => either,
+        }
+    }
+
+    fn grad_interval(&self, b: [Interval; 3]) -> [Interval; 3] {
+        if b.iter().any(|i| i.is_nan()) {
+            return [Interval::nan(); 3];
+        }
+        // The gradient is a unit vector everywhere (also on the surface).
+        [Interval::new(-1.0, 1.0); 3]
+    }
+
+    fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        // Neighbouring points of a block share their nearest triangle more
+        // often than not: the previous point's triangle seeds the search.
+        let mut prev = u32::MAX;
+        for i in 0..out.len() {
+            let p = [x[i] as f64, y[i] as f64, z[i] as f64];
+            if p.iter().any(|c| c.is_nan()) {
+                out[i] = f32::NAN;
+                continue;
+            }
+            let mut seed = Hit::NONE;
+            if prev != u32::MAX {
+                self.bvh.test(p, prev as usize, &mut seed);
+            }
+            let h = self.bvh.closest(p, seed);
+            prev = h.tri;
+            out[i] = self.value_from(p, &h) as f32;
+        }
+    }
+}
