@@ -223,7 +223,8 @@ pub fn dither(
 }
 
 /// Calls the source for layer `k` on cleared buffers, then normalises the
-/// fractions and adds them to the integrals (per row, summed in order, so
+/// fractions of inside voxels (the only ones read) and adds them to the
+/// integrals (per row, summed in order, so
 /// the totals do not depend on the thread count).
 fn load(
     slot: &mut Slot,
@@ -243,8 +244,8 @@ fn load(
         .map(|(f, m)| {
             let mut s = vec![0.0f64; n];
             for (v, &inside) in f.chunks_mut(n).zip(m) {
-                normalise(v);
                 if inside {
+                    normalise(v);
                     for (a, &b) in s.iter_mut().zip(v.iter()) {
                         *a += b as f64;
                     }
@@ -397,9 +398,34 @@ impl Diffuser {
     }
 
     fn layer(&mut self, k: usize, slot: &Slot, next_mask: Option<&[bool]>, out: &mut [u8]) {
-        let (nx, ny, c) = (self.nx, self.ny, self.c);
+        // Fixed channel counts unroll the per-material loops.
+        match self.c {
+            1 => self.scan::<1>(k, slot, next_mask, out),
+            2 => self.scan::<2>(k, slot, next_mask, out),
+            3 => self.scan::<3>(k, slot, next_mask, out),
+            _ => self.scan::<0>(k, slot, next_mask, out),
+        }
+        std::mem::swap(&mut self.cur, &mut self.next);
+        self.next.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// One layer; `C` is the channel count, or 0 for "read `self.c`".
+    fn scan<const C: usize>(
+        &mut self,
+        k: usize,
+        slot: &Slot,
+        next_mask: Option<&[bool]>,
+        out: &mut [u8],
+    ) {
+        let (nx, ny) = (self.nx, self.ny);
+        let c = if C == 0 { self.c } else { C };
         let n = c + 1;
         for j in 0..ny {
+            let row = j * nx..(j + 1) * nx;
+            if !slot.mask[row.clone()].iter().any(|&m| m) {
+                out[row].fill(OUTSIDE);
+                continue;
+            }
             let forward = (j + k) & 1 == 0;
             for step in 0..nx {
                 let i = if forward { step } else { nx - 1 - step };
@@ -417,7 +443,6 @@ impl Diffuser {
                     self.demand[m] = d;
                     sum += d;
                     self.carry[m] = 0.0;
-                    e[m] = 0.0;
                 }
                 self.demand[c] = 1.0 - sum;
                 let mut pick = 0;
@@ -430,9 +455,9 @@ impl Diffuser {
                 if pick < c {
                     self.demand[pick] -= 1.0;
                 }
-                // Weights of the taps that land inside.
+                // Targets and weights of the taps that land inside.
                 let mut total = 0.0f32;
-                let mut live = [false; 7];
+                let mut live = [(usize::MAX, false, 0.0f32); 7];
                 for (t, &(dx, dy, dz, w)) in TAPS.iter().enumerate() {
                     let ii = if forward {
                         i as isize + dx
@@ -450,7 +475,7 @@ impl Diffuser {
                         next_mask.is_some_and(|m| m[q])
                     };
                     if inside {
-                        live[t] = true;
+                        live[t] = (q, dz == 0, w);
                         total += w;
                     }
                 }
@@ -461,29 +486,18 @@ impl Diffuser {
                     continue;
                 }
                 let scale = 1.0 / total;
-                for (t, &(dx, dy, dz, w)) in TAPS.iter().enumerate() {
-                    if !live[t] {
+                for &(q, same, w) in &live {
+                    if q == usize::MAX {
                         continue;
                     }
-                    let ii = if forward {
-                        i as isize + dx
-                    } else {
-                        i as isize - dx
-                    } as usize;
-                    let q = ((j + dy) * nx + ii) * c;
-                    let buf = if dz == 0 {
-                        &mut self.cur
-                    } else {
-                        &mut self.next
-                    };
+                    let buf = if same { &mut self.cur } else { &mut self.next };
                     let wt = w * scale;
-                    for m in 0..c {
-                        buf[q + m] += wt * self.demand[m];
+                    let dst = &mut buf[q * c..q * c + c];
+                    for (d, &e) in dst.iter_mut().zip(&self.demand[..c]) {
+                        *d += wt * e;
                     }
                 }
             }
         }
-        std::mem::swap(&mut self.cur, &mut self.next);
-        self.next.iter_mut().for_each(|v| *v = 0.0);
     }
 }
