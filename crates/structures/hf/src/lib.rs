@@ -11,6 +11,7 @@
 
 mod args;
 mod cells;
+mod graded;
 mod pasko;
 mod struts;
 mod tables;
@@ -27,6 +28,7 @@ pub fn register(r: &mut Registry) {
     cells::register(r);
     tpms::register(r);
     struts::register(r);
+    graded::register(r);
 }
 
 /// Installs the library into every standard HyperFun registry of this
