@@ -60,7 +60,7 @@ fn main() {
     let mut outs = vec![part.clone()];
     outs.extend(model.fractions(&part));
     let tape = Tape::with_outputs(&outs);
-    let geo = Tape::new(&part);
+    let geo = microfrep_core::Shape::new(part.clone());
 
     let dir = std::env::temp_dir().join(format!("stack-timing-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -70,7 +70,7 @@ fn main() {
     write_stack(
         &geo,
         &sg,
-        Format::Png { aa: false },
+        &Format::Png { aa: false },
         &dir.join("binary"),
         &|| {},
     )

@@ -119,7 +119,7 @@ fn fig3_wiffle_cube_is_a_rounded_cube_with_holes_through_the_faces() {
     assert!(p.inside([1.5, 1.5, 1.5]) && p.inside([1.9, 1.4, 0.3]));
     assert!(!p.inside([1.0, 1.0, 1.0]) && !p.inside([2.2, 2.2, 2.2]));
     // Watertight through the mesher.
-    let mesh = Plan::new(&m.value, &MeshOptions::new([[-2.2; 3], [2.2; 3]], 48))
+    let mesh = Plan::new(&m.shape(), &MeshOptions::new([[-2.2; 3], [2.2; 3]], 48))
         .unwrap()
         .run(&|_| {})
         .unwrap();
@@ -175,7 +175,7 @@ fn fig5_femur_union_a_is_parks_blend() {
     assert!(ours.inside([0.6, 3.4, 0.0]) && ours.inside([0.0, 2.0, 0.0]));
     assert!(!ours.inside([0.7, 0.0, 0.0]) && !ours.inside([0.0, -3.0, 0.0]));
     let mesh = Plan::new(
-        &m.value,
+        &m.shape(),
         &MeshOptions::new([[-1.3, -3.0, -0.9], [1.6, 4.3, 0.9]], 48),
     )
     .unwrap()
