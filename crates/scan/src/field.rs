@@ -104,7 +104,7 @@ impl ScanField {
                 vol.dims
             )));
         }
-        if vol.dims.iter().any(|&d| d > u32::MAX as usize / 2) {
+        if vol.len() >= u32::MAX as usize {
             return Err(ScanError::Invalid(format!(
                 "volume dims {:?} are too large for a scan field",
                 vol.dims

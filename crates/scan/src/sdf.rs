@@ -33,14 +33,47 @@ const DISC: f64 = 0.6;
 /// compare the neighbouring seeds' elements too.
 const BAND: f64 = 3.0;
 
+/// Seeds themselves (nearer than this many largest spacings) keep their
+/// own element: it is their projection onto the linearised surface.
+const INNER: f64 = 0.5;
+
+/// Offsets of the seeds (around the nearest one) whose elements are
+/// compared in the band: the seed and its face and edge neighbours.
+const NEIGHBOURS: [[i64; 3]; 19] = [
+    [0, 0, 0],
+    [-1, 0, 0],
+    [1, 0, 0],
+    [0, -1, 0],
+    [0, 1, 0],
+    [0, 0, -1],
+    [0, 0, 1],
+    [-1, -1, 0],
+    [1, -1, 0],
+    [-1, 1, 0],
+    [1, 1, 0],
+    [-1, 0, -1],
+    [1, 0, -1],
+    [-1, 0, 1],
+    [1, 0, 1],
+    [0, -1, -1],
+    [0, 1, -1],
+    [0, -1, 1],
+    [0, 1, 1],
+];
+
 /// A surface element of one seed voxel (local coordinates: mm from the
 /// centre of voxel (0, 0, 0)).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Surfel {
+    /// Foot point on the linearised iso surface.
     p: [f32; 3],
-    n: [f32; 3],
-    v: [u32; 3],
+    /// Unit normal (towards the inside), in units of 1/32767.
+    n: [i16; 3],
+    /// Linear index of the seed voxel.
+    v: u32,
 }
+
+const NSCALE: f64 = 32767.0;
 
 /// Bytes of one surface element.
 pub(crate) const SURFEL_BYTES: u64 = std::mem::size_of::<Surfel>() as u64;
@@ -211,8 +244,8 @@ fn surfel<S: Src>(src: &S, lat: &Lattice, iso: f64, p: [usize; 3]) -> Surfel {
     };
     Surfel {
         p: s.map(|c| c as f32),
-        n: n.map(|c| c as f32),
-        v: p.map(|c| c as u32),
+        n: n.map(|c| (c * NSCALE).round() as i16),
+        v: i as u32,
     }
 }
 
@@ -237,8 +270,8 @@ pub(crate) fn surfels<S: Src>(
     let mut out = vec![
         Surfel {
             p: [0.0; 3],
-            n: [0.0; 3],
-            v: [0; 3]
+            n: [0; 3],
+            v: 0
         };
         total
     ];
@@ -459,19 +492,24 @@ impl Envelope {
     }
 }
 
-/// Distance from `x` to a surface element (a disc of radius `r`).
+/// Squared distance from `x` to a surface element (a disc of radius `r`).
 #[inline]
-fn disc(x: [f64; 3], s: &Surfel, r: f64) -> f64 {
+fn disc2(x: [f64; 3], s: &Surfel, r: f64) -> f64 {
     let d = [
         x[0] - s.p[0] as f64,
         x[1] - s.p[1] as f64,
         x[2] - s.p[2] as f64,
     ];
-    let dn = d[0] * s.n[0] as f64 + d[1] * s.n[1] as f64 + d[2] * s.n[2] as f64;
+    // The quantised normal is unit length within 1e-4.
+    let n = s.n.map(|c| c as f64 * (1.0 / NSCALE));
+    let dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
     let all = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    let lat = (all - dn * dn).max(0.0).sqrt();
-    let e = (lat - r).max(0.0);
-    (dn * dn + e * e).sqrt()
+    let lat2 = all - dn * dn;
+    if lat2 <= r * r {
+        return dn * dn;
+    }
+    let e = lat2.sqrt() - r;
+    dn * dn + e * e
 }
 
 /// Turns the feature transform into signed distances, in place in `d2`.
@@ -484,22 +522,24 @@ pub(crate) fn signed_distances<S: Src>(
     d2: &mut [f32],
     t: &Ticker,
 ) {
-    let [nx, ny, nz] = lat.dims;
+    let [nx, ny, _] = lat.dims;
     let plane = nx * ny;
     let hmax = lat.spacing.iter().cloned().fold(0.0, f64::max);
     let r = DISC * hmax;
     let band2 = (BAND * hmax).powi(2);
+    let inner2 = (INNER * hmax).powi(2);
     let diag = (0..3)
         .map(|a| (lat.dims[a] as f64 * lat.spacing[a]).powi(2))
         .sum::<f64>()
         .sqrt();
     let is_seed_at = |q: [usize; 3]| -> Option<&Surfel> {
-        let f = feat[q[0] + nx * (q[1] + ny * q[2])];
+        let l = q[0] + nx * (q[1] + ny * q[2]);
+        let f = feat[l];
         if f == NONE {
             return None;
         }
         let s = &surfels[f as usize];
-        (s.v == q.map(|c| c as u32)).then_some(s)
+        (s.v as usize == l).then_some(s)
     };
     d2.par_chunks_mut(plane).enumerate().for_each(|(k, dp)| {
         for j in 0..ny {
@@ -513,31 +553,31 @@ pub(crate) fn signed_distances<S: Src>(
                 ];
                 let f = feat[idx];
                 let mut best = if f == NONE {
-                    diag
+                    diag * diag
                 } else {
-                    disc(x, &surfels[f as usize], r)
+                    disc2(x, &surfels[f as usize], r)
                 };
-                if f != NONE && (dp[o] as f64) <= band2 {
-                    let c = surfels[f as usize].v.map(|c| c as usize);
-                    for dk in -1i64..=1 {
-                        for dj in -1i64..=1 {
-                            for di in -1i64..=1 {
-                                let q = [c[0] as i64 + di, c[1] as i64 + dj, c[2] as i64 + dk];
-                                if (0..3).any(|a| q[a] < 0 || q[a] >= lat.dims[a] as i64) {
-                                    continue;
-                                }
-                                if let Some(s) = is_seed_at(q.map(|v| v as usize)) {
-                                    best = best.min(disc(x, s, r));
-                                }
-                            }
+                if f != NONE && (dp[o] as f64) <= band2 && (dp[o] as f64) > inner2 {
+                    let l = surfels[f as usize].v as usize;
+                    let c = [l % nx, (l / nx) % ny, l / plane];
+                    for off in NEIGHBOURS {
+                        let q = [
+                            c[0] as i64 + off[0],
+                            c[1] as i64 + off[1],
+                            c[2] as i64 + off[2],
+                        ];
+                        if (0..3).any(|a| q[a] < 0 || q[a] >= lat.dims[a] as i64) {
+                            continue;
+                        }
+                        if let Some(s) = is_seed_at(q.map(|v| v as usize)) {
+                            best = best.min(disc2(x, s, r));
                         }
                     }
                 }
-                let inside = src.get(idx) >= iso;
-                dp[o] = if inside { best as f32 } else { -(best as f32) };
+                let best = best.sqrt() as f32;
+                dp[o] = if src.get(idx) >= iso { best } else { -best };
             }
         }
         t.tick(1);
     });
-    let _ = nz;
 }
