@@ -178,6 +178,15 @@ pub enum ScanError {
         /// Largest sample.
         max: f64,
     },
+    /// The core grid field refused the volume (too many samples, ...).
+    #[error("{}: as a grid field: {source}", path.display())]
+    Grid {
+        /// The volume's source.
+        path: PathBuf,
+        /// The core error.
+        #[source]
+        source: microfrep_core::field::GridError,
+    },
     /// An option or argument is out of range.
     #[error("{0}")]
     Invalid(String),

@@ -338,8 +338,12 @@ impl Volume {
         let max =
             std::array::from_fn(|a| self.origin[a] + (self.dims[a] as f64 - 1.0) * self.spacing[a]);
         let values: Vec<f64> = (0..self.len()).map(|i| self.value_at(i)).collect();
-        microfrep_core::GridField::new(name, self.dims, self.origin, max, values)
-            .map_err(|e| ScanError::Invalid(format!("{}: {e}", self.source.display())))
+        microfrep_core::GridField::new(name, self.dims, self.origin, max, values).map_err(
+            |source| ScanError::Grid {
+                path: self.source.clone(),
+                source,
+            },
+        )
     }
 }
 

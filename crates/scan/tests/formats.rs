@@ -840,3 +840,95 @@ fn microfrep_voxels_outputs_read_back() {
         Err(ScanError::Json { .. })
     ));
 }
+
+#[test]
+fn nrrd_text_and_file_lists() {
+    let d = tmp("nrrd-text");
+    let g = Grid::iso([0.5; 3]);
+    let vals = g.values(hu);
+    let text: Vec<String> = vals.iter().map(|v| format!("{v}")).collect();
+    let p = d.join("text.nrrd");
+    let mut b = nrrd_header(&g, "short", "text", "little", "\n");
+    b.push_str(&text.join(" "));
+    std::fs::write(&p, &b).unwrap();
+    let v = Volume::open(&p, &ReadOptions::default()).unwrap();
+    assert_eq!(v.samples.sample_type(), SampleType::I16);
+    assert_values(&v, hu, 0.0);
+    // One short: truncated, naming the sample count.
+    std::fs::write(&p, &b[..b.rfind(' ').unwrap()]).unwrap();
+    assert!(matches!(
+        Volume::open(&p, &ReadOptions::default()),
+        Err(ScanError::Truncated { .. })
+    ));
+    // A list of slice files.
+    let [nx, ny, nz] = g.dims;
+    let bytes = i16_bytes(&vals, false);
+    let mut list = String::new();
+    for k in 0..nz {
+        let name = format!("s{k}.raw");
+        std::fs::write(
+            d.join(&name),
+            &bytes[2 * k * nx * ny..2 * (k + 1) * nx * ny],
+        )
+        .unwrap();
+        list.push_str(&name);
+        list.push('\n');
+    }
+    let p = d.join("list.nhdr");
+    std::fs::write(
+        &p,
+        nrrd_header(
+            &g,
+            "short",
+            "raw",
+            "little",
+            &format!("data file: LIST\n{list}"),
+        ),
+    )
+    .unwrap();
+    let v = Volume::open(&p, &ReadOptions::default()).unwrap();
+    assert_values(&v, hu, 0.0);
+    // The same as a numbered pattern.
+    std::fs::write(
+        &p,
+        nrrd_header(
+            &g,
+            "short",
+            "raw",
+            "little",
+            &format!("data file: s%d.raw 0 {} 1\n", nz - 1),
+        ),
+    )
+    .unwrap();
+    let v = Volume::open(&p, &ReadOptions::default()).unwrap();
+    assert_values(&v, hu, 0.0);
+    // The volume as a core grid field: the sample at its centre.
+    let gf = v.to_grid_field("ct").unwrap();
+    assert_eq!(gf.eval(v.position([2, 3, 4])), v.value(2, 3, 4));
+}
+
+#[test]
+fn nifti_header_and_image_pair() {
+    use ndarray::Array3;
+    let d = tmp("nifti-pair");
+    let a = Array3::from_shape_fn((5, 4, 3), |(i, j, k)| (i * j + k) as f32 * 0.5);
+    let mut h = nifti_header();
+    h.sform_code = 0;
+    h.qform_code = 0;
+    h.pixdim = [1.0, 0.001, 0.002, 0.003, 1.0, 1.0, 1.0, 1.0];
+    h.xyzt_units = 1; // metres
+    let p = d.join("pair.hdr");
+    nifti::writer::WriterOptions::new(&p)
+        .reference_header(&h)
+        .write_nifti(&a)
+        .unwrap();
+    assert!(d.join("pair.img").exists());
+    let v = Volume::open(&p, &ReadOptions::default()).unwrap();
+    assert_eq!(v.dims, [5, 4, 3]);
+    assert!(
+        (0..3).all(|i| (v.spacing[i] - [1.0, 2.0, 3.0][i]).abs() < 1e-4),
+        "{:?}",
+        v.spacing
+    );
+    assert_eq!(v.value(3, 2, 1), 3.5);
+}
