@@ -29,6 +29,7 @@ pub mod error;
 pub mod grid;
 pub mod measure;
 pub mod report;
+pub mod summary;
 pub mod thickness;
 pub mod volume;
 

@@ -1,13 +1,13 @@
-//! `microfrep`: a thin shell over the library crates. Argument parsing,
-//! model loading and printing only; the algorithms live in the crates.
+//! `microfrep`: a thin shell over the library crates. Each verb parses its
+//! options and calls the library; the algorithms and the policies (memory,
+//! streaming, atomic outputs) live in the crates.
 
 mod analyze_cmd;
-mod boxarg;
 mod cell_cmd;
 mod check_cmd;
+mod common;
 mod eval_cmd;
 mod mesh_cmd;
-mod model;
 mod render_cmd;
 mod slice_cmd;
 mod voxels_cmd;
@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "microfrep",
     version,
-    about = "Function-based microstructures: model, check, mesh, slice"
+    about = "Function-based microstructures: model, check, mesh, slice, analyse"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -50,12 +50,43 @@ enum Cmd {
     Analyze(analyze_cmd::AnalyzeArgs),
 }
 
+fn list_examples(only: Option<&str>) -> anyhow::Result<()> {
+    let all = microfrep::structures::examples::all();
+    if let Some(n) = only {
+        if !all.iter().any(|e| e.name == n) {
+            anyhow::bail!("no example named '{n}'");
+        }
+    }
+    for e in all.iter().filter(|e| only.is_none_or(|n| n == e.name)) {
+        let (lo, hi) = e.bounds;
+        println!(
+            "{:<14} bounds {:?}..{:?}\n    {}",
+            e.name, lo, hi, e.description
+        );
+    }
+    Ok(())
+}
+
+/// Whether an error is a closed pipe (`microfrep eval ... | head`): the
+/// reader has what it wanted, which is not a failure.
+fn broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
 fn main() {
-    // Every verb (check included) sees the mf* microstructure functions.
-    microfrep_structures_hf::install();
+    // Ctrl-C and SIGTERM remove the outputs being written, for every verb.
+    // Only the first handler of a process can be installed; if that fails
+    // the default applies and temporaries may stay.
+    let _ = ctrlc::set_handler(|| {
+        microfrep::io::atomic::cleanup_all();
+        std::process::exit(130);
+    });
     let cli = Cli::parse();
     let res = match cli.cmd {
-        Cmd::Examples { name } => model::list_examples(name.as_deref()),
+        Cmd::Examples { name } => list_examples(name.as_deref()),
         Cmd::Eval(a) => eval_cmd::run(a),
         Cmd::Check(a) => check_cmd::run(a),
         Cmd::Cell(a) => cell_cmd::run(a),
@@ -66,6 +97,9 @@ fn main() {
         Cmd::Analyze(a) => analyze_cmd::run(a),
     };
     if let Err(e) = res {
+        if broken_pipe(&e) {
+            std::process::exit(0);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

@@ -1,16 +1,15 @@
 //! `microfrep render`: a ray-cast image, a cut-away, or a section.
 
-use crate::model;
-use crate::slice_cmd::bounds;
+use crate::common::{check_extension, frame, load_model, ModelArgs, RunArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use microfrep_render::{cutaway, ray_cast, section, Camera, Plane, View};
+use microfrep::render::{cutaway, ray_cast, section, Camera, Plane, View};
 use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Model: a HyperFun file (.hf) or a built-in example name (see `microfrep examples`).
-    model: String,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
@@ -26,9 +25,8 @@ pub struct RenderArgs {
     /// Remove the octant nearest the viewer to show the inside.
     #[arg(long)]
     cutaway: bool,
-    /// Box to frame: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds, else from interval analysis).
-    #[arg(long, allow_hyphen_values = true)]
-    bounds: Option<String>,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 fn size(s: &str) -> Result<(usize, usize)> {
@@ -41,17 +39,31 @@ fn size(s: &str) -> Result<(usize, usize)> {
     let h: usize = h
         .parse()
         .with_context(|| format!("--size '{s}': bad height"))?;
-    microfrep_render::camera::check_size(w, h)?;
+    microfrep::render::camera::check_size(w, h)?;
     Ok((w, h))
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
-    let m = model::load(&a.model)?;
-    let (min, max) = bounds(&m, a.bounds.as_deref())?;
+    a.run.init()?;
+    check_extension(&a.output, &["png"], "the image")?;
     let (w, h) = size(&a.size)?;
+    let m = load_model(&a.model, &a.run)?;
+    let b = frame(&m, &a.model, &a.run)?;
+    let (min, max) = (b.min, b.max);
     let img = match a.section {
         Some(_) if a.cutaway => bail!("--section and --cutaway do not combine"),
-        Some(plane) => section(&m.shape, plane, min, max, w, h),
+        Some(plane) => {
+            let (lo, hi) = (min[plane.axis], max[plane.axis]);
+            if !(lo..=hi).contains(&plane.value) {
+                bail!(
+                    "--section {}: the plane is outside the box ({} .. {} on that axis)",
+                    plane.value,
+                    lo,
+                    hi
+                );
+            }
+            section(&m.shape, plane, min, max, w, h)
+        }
         None => {
             let s = if a.cutaway {
                 cutaway(&m.shape, a.view, min, max)
@@ -62,5 +74,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }
     };
     img.save_png(&a.output)?;
+    if a.run.json {
+        println!(
+            "{}",
+            serde_json::json!({ "output": a.output.display().to_string(), "size": [w, h] })
+        );
+    }
     Ok(())
 }

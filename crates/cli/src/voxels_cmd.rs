@@ -1,16 +1,15 @@
 //! `microfrep voxels`: occupancy or field values on a voxel grid.
 
-use crate::model;
-use crate::slice_cmd::bounds;
+use crate::common::{check_extension, frame, load_model, ModelArgs, RunArgs};
 use anyhow::Result;
 use clap::Args;
-use microfrep_fab::voxels::{write_voxels, VoxelGrid};
+use microfrep::fab::voxels::{write_voxels, VoxelGrid};
 use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct VoxelsArgs {
-    /// Model: a HyperFun file (.hf) or a built-in example name (see `microfrep examples`).
-    model: String,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Output: .raw (with a .json sidecar), .vtk or .nrrd.
     #[arg(short, long)]
     output: PathBuf,
@@ -20,17 +19,28 @@ pub struct VoxelsArgs {
     /// Write f32 values instead of occupancy bytes.
     #[arg(long)]
     field: bool,
-    /// Box to sample: xmin,ymin,zmin,xmax,ymax,zmax (default: the example's bounds, else from interval analysis).
-    #[arg(long, allow_hyphen_values = true)]
-    bounds: Option<String>,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 pub fn run(a: VoxelsArgs) -> Result<()> {
-    let m = model::load(&a.model)?;
-    let (min, max) = bounds(&m, a.bounds.as_deref())?;
-    let grid = VoxelGrid::new(min, max, a.voxel)?;
+    a.run.init()?;
+    check_extension(&a.output, &["raw", "vtk", "nrrd"], "the voxel file")?;
+    let m = load_model(&a.model, &a.run)?;
+    let b = frame(&m, &a.model, &a.run)?;
+    let grid = VoxelGrid::new(b.min, b.max, a.voxel)?;
     write_voxels(&m.shape, &grid, a.field, &a.output)?;
     let [nx, ny, nz] = grid.dims;
-    eprintln!("{nx} x {ny} x {nz} voxels -> {}", a.output.display());
+    if a.run.json {
+        let s = serde_json::json!({
+            "output": a.output.display().to_string(),
+            "dims": grid.dims,
+            "spacing": grid.spacing,
+            "origin": grid.origin,
+        });
+        println!("{s}");
+    } else if !a.run.quiet {
+        eprintln!("{nx} x {ny} x {nz} voxels -> {}", a.output.display());
+    }
     Ok(())
 }

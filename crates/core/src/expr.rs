@@ -332,7 +332,9 @@ impl Expr {
                 ExprNode::PowI(a, n) => m(a).powi(*n),
                 ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
                 ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)),
-                ExprNode::Blend { op, args } => Expr::blend(*op, std::array::from_fn(|i| m(&args[i]))),
+                ExprNode::Blend { op, args } => {
+                    Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
+                }
                 ExprNode::Field { field, comp, args } => Expr::field_comp(
                     field.clone(),
                     *comp,

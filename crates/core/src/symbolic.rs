@@ -100,7 +100,10 @@ fn grad(root: &Expr, memo: &mut HashMap<*const ExprNode, Grad>) -> Grad {
             }
             ExprNode::Set { op, a, b, alpha } => {
                 let [ka, kb, kc] = set_factors(*op, a, b, alpha, e);
-                add(&add(&scale(d(a), &ka), &scale(d(b), &kb)), &scale(d(alpha), &kc))
+                add(
+                    &add(&scale(d(a), &ka), &scale(d(b), &kb)),
+                    &scale(d(alpha), &kc),
+                )
             }
             ExprNode::Blend { op, args } => {
                 let [a, b, alpha, a0, a1, a2] = &**args;

@@ -6,6 +6,7 @@
 //! HyperFun.
 
 pub mod ast;
+pub mod check;
 mod diag;
 mod lexer;
 pub mod library;
@@ -84,6 +85,40 @@ pub fn parse_with_table(
 /// Parses and lowers object `object` (default `my_model`, else the first).
 pub fn load(src: &str, file: &str, object: Option<&str>) -> Result<Model, Diagnostics> {
     load_with_params(src, file, object, &[])
+}
+
+/// What to load from a HyperFun file besides the source.
+#[derive(Clone, Default)]
+pub struct LoadOptions {
+    /// Object to evaluate (default `my_model`, else the first).
+    pub object: Option<String>,
+    /// `a[k] = value` as `(k, value)` pairs, 1-based.
+    pub params: Vec<(usize, f64)>,
+    /// Data fields bound as functions `NAME(x[3])` (see
+    /// [`library::Registry::register_field`]).
+    pub fields: Vec<(String, std::sync::Arc<dyn microfrep_core::Field>)>,
+}
+
+/// Parses and lowers with [`LoadOptions`]: the object, its parameters and
+/// the data fields the model may call by name.
+pub fn load_with_options(src: &str, file: &str, opts: &LoadOptions) -> Result<Model, Diagnostics> {
+    let mut registry = library::Registry::standard();
+    for (name, f) in &opts.fields {
+        registry.register_field(name, f.clone());
+    }
+    let table = |name: &str| standard_signature(&registry, name);
+    let (program, _) = parse_with_table(src, file, Options::default(), &table)?;
+    let program = std::sync::Arc::new(program);
+    lower::load_program_with(program, opts.object.as_deref(), &opts.params, &registry).map_err(
+        |e| {
+            let d = Diagnostic {
+                severity: Severity::Error,
+                pos: e.pos,
+                message: e.message,
+            };
+            Diagnostics::new(file, vec![d])
+        },
+    )
 }
 
 /// As [`load`], with parameters `a[k] = value` given as `(k, value)` pairs

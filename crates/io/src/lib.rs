@@ -33,6 +33,7 @@ pub mod atomic;
 pub mod format;
 pub mod limits;
 pub mod png;
+pub mod text;
 
 pub use atomic::{AtomicDir, AtomicFile};
 pub use format::{FormatRegistry, OutputFormat};

@@ -201,7 +201,12 @@ fn microfrep_meshes_of_a_sphere_and_a_lattice_part() {
     use microfrep_mesh::{MeshOptions, Plan};
     let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
     let opts = MeshOptions::new([[-1.1; 3], [1.1; 3]], 24);
-    let mesh = from_microfrep(&Plan::new(&microfrep_core::Shape::from(&ball), &opts).unwrap().run(&|_| {}).unwrap());
+    let mesh = from_microfrep(
+        &Plan::new(&microfrep_core::Shape::from(&ball), &opts)
+            .unwrap()
+            .run(&|_| {})
+            .unwrap(),
+    );
     let f = build(&mesh);
     assert_eq!(f.sign_method(), SignMethod::PseudoNormal);
     let pts = sample_points(&mesh, 800, 1);
@@ -222,7 +227,12 @@ fn microfrep_meshes_of_a_sphere_and_a_lattice_part() {
         1.0,
     );
     let part = frep::intersection(&rods, &ball, 1.0);
-    let mesh = from_microfrep(&Plan::new(&microfrep_core::Shape::from(&part), &opts).unwrap().run(&|_| {}).unwrap());
+    let mesh = from_microfrep(
+        &Plan::new(&microfrep_core::Shape::from(&part), &opts)
+            .unwrap()
+            .run(&|_| {})
+            .unwrap(),
+    );
     assert!(mesh.topology().is_watertight(), "{:?}", mesh.topology());
     let f = build(&mesh);
     // At this coarse resolution the mesher's output is closed and oriented

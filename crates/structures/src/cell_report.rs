@@ -136,3 +136,123 @@ pub fn cell_report(
     }
     Ok(CellReport { axes, tol, n })
 }
+
+// Reports for people and programs (the `microfrep cell` verb prints them).
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// One line of advice for an axis.
+fn advice(a: &AxisReport) -> String {
+    let saw = if a.sawtooth_safe() {
+        "sawtooth safe (full connectivity: continuous field)"
+    } else if a.sawtooth_connected() {
+        "sawtooth: boundaries match at cell faces but the field jumps there (geometric connectivity only; offsets and blends may crack)"
+    } else {
+        "sawtooth unsafe (the shape differs on opposite faces: seams)"
+    };
+    let tri = if a.triangle_safe() {
+        "triangle safe (symmetric)"
+    } else {
+        "triangle mirrors every second cell (not symmetric)"
+    };
+    format!("{saw}; {tri}")
+}
+
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
+fn axes_where(r: &CellReport, f: impl Fn(&AxisReport) -> bool) -> Vec<&'static str> {
+    (0..3).filter(|&i| f(&r.axes[i])).map(|i| AXES[i]).collect()
+}
+
+/// The report as JSON (the keys of `microfrep cell --json`).
+pub fn to_json(r: &CellReport, min: [f64; 3], max: [f64; 3]) -> serde_json::Value {
+    let axes: Vec<serde_json::Value> = (0..3)
+        .map(|i| {
+            let a = &r.axes[i];
+            serde_json::json!({
+                "axis": AXES[i],
+                "geometric": a.geometric,
+                "full": a.full,
+                "symmetric": a.symmetric,
+                "max_face_diff": a.max_face_diff,
+                "max_symmetry_diff": a.max_symmetry_diff,
+                "sawtooth_safe": a.sawtooth_safe(),
+                "sawtooth_connected": a.sawtooth_connected(),
+                "triangle_safe": a.triangle_safe(),
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "box": [min, max],
+        "samples": r.n,
+        "tolerance": r.tol,
+        "geometric": r.geometric(),
+        "full": r.full(),
+        "symmetric": r.symmetric(),
+        "sawtooth_safe_axes": axes_where(r, AxisReport::sawtooth_safe),
+        "triangle_safe_axes": axes_where(r, AxisReport::triangle_safe),
+        "axes": axes,
+    })
+}
+
+impl CellReport {
+    /// The report as text: the table of face and symmetry checks and the
+    /// replication advice per axis.
+    pub fn to_text(&self, min: [f64; 3], max: [f64; 3]) -> String {
+        use std::fmt::Write as _;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "unit cell {min:?}..{max:?}: {n}x{n} samples per face, {n} per axis for symmetry, \
+             absolute tolerance {t:e}",
+            n = self.n,
+            t = self.tol
+        );
+        let _ = writeln!(
+            out,
+            "axis  geometric  full  symmetric  max face diff  max symmetry diff"
+        );
+        for (i, ax) in self.axes.iter().enumerate() {
+            let _ = writeln!(
+                out,
+                "{:<5} {:<10} {:<5} {:<10} {:<14.3e} {:.3e}",
+                AXES[i],
+                yes(ax.geometric),
+                yes(ax.full),
+                yes(ax.symmetric),
+                ax.max_face_diff,
+                ax.max_symmetry_diff
+            );
+        }
+        for (i, ax) in self.axes.iter().enumerate() {
+            let _ = writeln!(out, "{}: {}", AXES[i], advice(ax));
+        }
+        let list = |v: Vec<&str>| {
+            if v.is_empty() {
+                "none".to_string()
+            } else {
+                v.join(" ")
+            }
+        };
+        let _ = writeln!(
+            out,
+            "connectivity: geometric {}, full {}; symmetric {}",
+            yes(self.geometric()),
+            yes(self.full()),
+            yes(self.symmetric())
+        );
+        let _ = writeln!(
+            out,
+            "safe replication: sawtooth on {}; triangle on {}",
+            list(axes_where(self, AxisReport::sawtooth_safe)),
+            list(axes_where(self, AxisReport::triangle_safe))
+        );
+        out
+    }
+}

@@ -115,15 +115,39 @@ impl Output {
 }
 
 /// Builds the call from arguments already checked against `kinds`.
-pub type Builder = fn(&[Arg]) -> Output;
+pub type Builder = std::sync::Arc<dyn Fn(&[Arg]) -> Output + Send + Sync>;
 
 /// One library function.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct LibFn {
     /// Lower-case name.
     pub name: &'static str,
+    /// The kind of each parameter.
     pub kinds: &'static [Kind],
+    /// Builds a call's value from its arguments.
     pub build: Builder,
+}
+
+impl std::fmt::Debug for LibFn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LibFn")
+            .field("name", &self.name)
+            .field("kinds", &self.kinds)
+            .finish()
+    }
+}
+
+/// A name made `'static` once per distinct spelling (names of bound
+/// fields come at run time; there are few of them).
+fn intern(name: &str) -> &'static str {
+    static NAMES: std::sync::Mutex<Vec<&'static str>> = std::sync::Mutex::new(Vec::new());
+    let mut v = NAMES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(n) = v.iter().find(|n| **n == name) {
+        return n;
+    }
+    let n: &'static str = Box::leak(name.to_string().into_boxed_str());
+    v.push(n);
+    n
 }
 
 /// Name (lower case) to library function.
@@ -164,8 +188,34 @@ impl Registry {
     }
 
     /// Adds (or replaces) a function. `name` must be lower case.
-    pub fn register(&mut self, name: &'static str, kinds: &'static [Kind], build: Builder) {
+    pub fn register(
+        &mut self,
+        name: &'static str,
+        kinds: &'static [Kind],
+        build: impl Fn(&[Arg]) -> Output + Send + Sync + 'static,
+    ) {
+        let build: Builder = std::sync::Arc::new(build);
         self.map.insert(name, LibFn { name, kinds, build });
+    }
+
+    /// Binds a data field as the function `name(x[3])` (case-insensitive),
+    /// which returns the field's value at `x`: how `--field NAME=FILE`
+    /// brings a mesh, a scan or measured data into a model.
+    pub fn register_field(&mut self, name: &str, field: std::sync::Arc<dyn microfrep_core::Field>) {
+        let name = intern(&name.to_ascii_lowercase());
+        self.register(name, &[Kind::A], move |a: &[Arg]| {
+            let p = a[0].array();
+            if p.len() != 3 {
+                return Output::error(format!(
+                    "{name}: argument 1 ('x') has {} elements; it must have 3 elements",
+                    p.len()
+                ));
+            }
+            Output::value(Expr::field_at(
+                field.clone(),
+                [p[0].clone(), p[1].clone(), p[2].clone()],
+            ))
+        });
     }
 
     /// Looks a name up, case-insensitively.

@@ -89,6 +89,17 @@ pub fn load_program(
     name: Option<&str>,
     params: &[(usize, f64)],
 ) -> Result<Model, LowerError> {
+    load_program_with(program, name, params, &Registry::standard())
+}
+
+/// As [`load_program`] with a given library (e.g. the standard one plus
+/// bound data fields, [`Registry::register_field`]).
+pub fn load_program_with(
+    program: Arc<Program>,
+    name: Option<&str>,
+    params: &[(usize, f64)],
+    registry: &Registry,
+) -> Result<Model, LowerError> {
     let Some(i) = select_object(&program, name) else {
         return Err(LowerError {
             message: match name {
@@ -99,7 +110,7 @@ pub fn load_program(
         });
     };
     let dense = dense_params(&program.objects[i], params)?;
-    lower(program, i, &Registry::standard(), &dense)
+    lower(program, i, registry, &dense)
 }
 
 /// `a[1..=N]` of `obj` from `(k, value)` pairs, checked.

@@ -1,0 +1,556 @@
+//! The one loader of models: a HyperFun file, a triangle mesh, a volume
+//! image, a built-in example, each into a [`Shape`].
+//!
+//! A source is written `PATH[:key=value,...]` (or an example name). The
+//! keys of each kind:
+//! - meshes (`.stl`, `.obj`, `.ply`, `.3mf`): `weld=TOL` (merge vertices
+//!   closer than TOL; default 0, exact duplicates), `sign=auto|winding|normal`;
+//! - scans (`.nrrd`, `.nhdr`, `.nii`, `.nii.gz`, `.tif`, `.tiff`, a folder
+//!   of TIFF or DICOM slices, `.raw` with its `.json`): `iso=V` (required:
+//!   the value at and above which a voxel is inside), `smooth=MM`,
+//!   `spacing=X,Y,Z` (TIFF), `step=N`, `series=UID` (DICOM);
+//! - data (`.csv`, only as a `--field`): `mode=interpolate|weights`.
+//!
+//! HyperFun models may call such sources by name: [`LoadOptions::fields`]
+//! binds `NAME=SOURCE` as a function `NAME(x[3])` (the `--field` option of
+//! every verb).
+
+use microfrep_core::{Bounds, Expr, Field, Shape};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// What a source turned out to be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceKind {
+    /// A HyperFun file.
+    HyperFun,
+    /// A triangle mesh.
+    Mesh,
+    /// A volume image.
+    Scan,
+    /// Measured data on a grid (a Bernstein-Bezier field).
+    Data,
+    /// A built-in example model.
+    Example,
+}
+
+/// A source and its options, parsed from `PATH[:key=value,...]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Source {
+    /// The file, folder or example name.
+    pub path: String,
+    /// The `key=value` options after the colon.
+    pub options: BTreeMap<String, String>,
+}
+
+impl Source {
+    /// Parses `PATH[:key=value,...]`. A colon followed by no `=` is part of
+    /// the path (so `C:\x` and `a:b.stl` stay paths).
+    pub fn parse(s: &str) -> Result<Source, LoadError> {
+        if let Some((p, opts)) = s.rsplit_once(':') {
+            if opts.contains('=') && !p.is_empty() {
+                let mut options = BTreeMap::new();
+                for kv in opts.split(',').filter(|t| !t.trim().is_empty()) {
+                    let (k, v) = kv.split_once('=').ok_or_else(|| LoadError::Options {
+                        source_name: s.to_string(),
+                        message: format!("'{kv}' is not key=value"),
+                    })?;
+                    options.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
+                }
+                return Ok(Source {
+                    path: p.to_string(),
+                    options,
+                });
+            }
+        }
+        Ok(Source {
+            path: s.to_string(),
+            options: BTreeMap::new(),
+        })
+    }
+
+    fn number(&self, key: &str) -> Result<Option<f64>, LoadError> {
+        match self.options.get(key) {
+            None => Ok(None),
+            Some(v) => v
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .map(Some)
+                .ok_or_else(|| self.bad(format!("{key}={v} is not a finite number"))),
+        }
+    }
+
+    fn bad(&self, message: String) -> LoadError {
+        LoadError::Options {
+            source_name: self.path.clone(),
+            message,
+        }
+    }
+
+    fn check_keys(&self, allowed: &[&str]) -> Result<(), LoadError> {
+        match self.options.keys().find(|k| !allowed.contains(&k.as_str())) {
+            Some(k) => Err(self.bad(format!(
+                "unknown option '{k}' (this kind of file takes: {})",
+                allowed.join(", ")
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Progress of a long load: (stage, done, total).
+pub type Progress<'a> = &'a (dyn Fn(&str, u64, u64) + Sync);
+
+/// How to load.
+#[derive(Clone, Default)]
+pub struct LoadOptions {
+    /// HyperFun object to evaluate (default `my_model`, else the first).
+    pub object: Option<String>,
+    /// HyperFun parameters `a[k] = v` as `(k, v)`, 1-based.
+    pub params: Vec<(usize, f64)>,
+    /// Sources bound as HyperFun functions: `(NAME, SOURCE)`.
+    pub fields: Vec<(String, String)>,
+    /// Bytes readers and field builders may use; default: what the process
+    /// may allocate ([`microfrep_io::limits::memory_limit`]).
+    pub memory_limit: Option<u64>,
+}
+
+/// A loaded model.
+pub struct Loaded {
+    /// The model every consumer takes.
+    pub shape: Shape,
+    /// What the source was.
+    pub kind: SourceKind,
+    /// The lowered HyperFun model (HyperFun sources only).
+    pub hyperfun: Option<microfrep_hyperfun::Model>,
+    /// Warnings for the user (an open mesh, a repaired orientation, ...).
+    pub notes: Vec<String>,
+    /// Files read, to protect them from being overwritten by outputs.
+    pub inputs: Vec<PathBuf>,
+}
+
+/// Why a model could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// A HyperFun file with errors (rendered with source lines and carets
+    /// by [`microfrep_hyperfun::Diagnostics::render`]).
+    #[error("{0}")]
+    HyperFun(#[source] microfrep_hyperfun::Diagnostics),
+    /// A file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A mesh file is malformed.
+    #[error(transparent)]
+    MeshRead(#[from] microfrep_meshfield::read::ReadError),
+    /// A mesh cannot become a field.
+    #[error("{path}: {source}")]
+    MeshField {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: microfrep_meshfield::MeshError,
+    },
+    /// A 3MF package is malformed.
+    #[error(transparent)]
+    ThreeMf(#[from] microfrep_3mf::Error),
+    /// A volume image is malformed or too large.
+    #[error(transparent)]
+    Scan(#[from] microfrep_scan::ScanError),
+    /// Measured data is malformed.
+    #[error(transparent)]
+    Data(#[from] microfrep_graded::Error),
+    /// Bad options of a source.
+    #[error("{source_name}: {message}")]
+    Options {
+        /// The source.
+        source_name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The name is no file and no example.
+    #[error("unknown model '{name}': not a file, and not a built-in example (known: {known})")]
+    Unknown {
+        /// The name given.
+        name: String,
+        /// The examples.
+        known: String,
+    },
+}
+
+fn limit(opts: &LoadOptions) -> u64 {
+    opts.memory_limit
+        .or_else(|| microfrep_io::limits::memory_limit().map(|m| (0.8 * m) as u64))
+        .unwrap_or(4 << 30)
+}
+
+/// What kind a path names, by its extension (or a folder: a scan).
+pub fn kind_of(path: &Path) -> Option<SourceKind> {
+    if path.is_dir() {
+        return Some(SourceKind::Scan);
+    }
+    let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+    let ends = |e: &str| name.ends_with(e);
+    if ends(".hf") {
+        Some(SourceKind::HyperFun)
+    } else if [".stl", ".obj", ".ply", ".3mf"].iter().any(|e| ends(e)) {
+        Some(SourceKind::Mesh)
+    } else if [
+        ".nrrd", ".nhdr", ".nii", ".nii.gz", ".hdr", ".tif", ".tiff", ".raw",
+    ]
+    .iter()
+    .any(|e| ends(e))
+    {
+        Some(SourceKind::Scan)
+    } else if ends(".csv") {
+        Some(SourceKind::Data)
+    } else {
+        None
+    }
+}
+
+/// Loads a model from a source (`PATH[:key=value,...]` or an example name).
+pub fn load(spec: &str, opts: &LoadOptions) -> Result<Loaded, LoadError> {
+    load_with_progress(spec, opts, &|_, _, _| {})
+}
+
+/// [`load`] with progress reports for long builds (mesh hierarchies,
+/// distance transforms).
+pub fn load_with_progress(
+    spec: &str,
+    opts: &LoadOptions,
+    progress: Progress,
+) -> Result<Loaded, LoadError> {
+    microfrep_structures_hf::install();
+    let src = Source::parse(spec)?;
+    let path = Path::new(&src.path);
+    let kind = if path.exists() {
+        kind_of(path)
+    } else {
+        kind_of(path).filter(|k| *k == SourceKind::HyperFun)
+    };
+    let hf_only = || -> Result<(), LoadError> {
+        if opts.object.is_some() || !opts.params.is_empty() || !opts.fields.is_empty() {
+            return Err(
+                src.bad("--object, --param and --field apply to HyperFun (.hf) models only".into())
+            );
+        }
+        Ok(())
+    };
+    match kind {
+        Some(SourceKind::HyperFun) => {
+            src.check_keys(&[])?;
+            load_hyperfun(path, opts, progress)
+        }
+        Some(SourceKind::Data) => Err(src.bad(
+            "measured data is a field, not a model: bind it with --field NAME=FILE.csv and \
+             call NAME(x) in a HyperFun model"
+                .into(),
+        )),
+        Some(k) => {
+            hf_only()?;
+            let f = field(&src, k, limit(opts), progress)?;
+            let shape = Shape::from_field(f.field).with_bounds(f.bounds);
+            Ok(Loaded {
+                shape,
+                kind: k,
+                hyperfun: None,
+                notes: f.notes,
+                inputs: vec![path.to_path_buf()],
+            })
+        }
+        None => {
+            if let Some(ex) = microfrep_structures::examples::by_name(&src.path) {
+                hf_only()?;
+                src.check_keys(&[])?;
+                let (lo, hi) = ex.bounds;
+                return Ok(Loaded {
+                    shape: Shape::new((ex.build)()).with_bounds(Bounds::new(lo, hi)),
+                    kind: SourceKind::Example,
+                    hyperfun: None,
+                    notes: Vec::new(),
+                    inputs: Vec::new(),
+                });
+            }
+            if path.exists() {
+                return Err(src.bad(
+                    "unknown kind of file (HyperFun .hf; meshes .stl .obj .ply .3mf; scans \
+                     .nrrd .nii .nii.gz .tif .tiff .raw or a folder of slices)"
+                        .into(),
+                ));
+            }
+            let known: Vec<&str> = microfrep_structures::examples::all()
+                .iter()
+                .map(|e| e.name)
+                .collect();
+            Err(LoadError::Unknown {
+                name: src.path.clone(),
+                known: known.join(", "),
+            })
+        }
+    }
+}
+
+fn load_hyperfun(path: &Path, opts: &LoadOptions, progress: Progress) -> Result<Loaded, LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|e| LoadError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let mut inputs = vec![path.to_path_buf()];
+    let mut notes = Vec::new();
+    let mut fields = Vec::new();
+    for (name, spec) in &opts.fields {
+        let src = Source::parse(spec)?;
+        let p = Path::new(&src.path);
+        let kind = kind_of(p).ok_or_else(|| {
+            src.bad("--field takes a mesh, a scan or a .csv of measured data".into())
+        })?;
+        if kind == SourceKind::HyperFun {
+            return Err(
+                src.bad("--field takes a mesh, a scan or a .csv, not a HyperFun file".into())
+            );
+        }
+        let f = field(&src, kind, limit(opts), progress)?;
+        notes.extend(f.notes.into_iter().map(|n| format!("{name}: {n}")));
+        inputs.push(p.to_path_buf());
+        fields.push((name.clone(), f.field));
+    }
+    let file = path.display().to_string();
+    let lo = microfrep_hyperfun::LoadOptions {
+        object: opts.object.clone(),
+        params: opts.params.clone(),
+        fields,
+    };
+    let m =
+        microfrep_hyperfun::load_with_options(&text, &file, &lo).map_err(LoadError::HyperFun)?;
+    Ok(Loaded {
+        shape: m.shape(),
+        kind: SourceKind::HyperFun,
+        hyperfun: Some(m),
+        notes,
+        inputs,
+    })
+}
+
+/// A data field built from a source, with where its solid lies.
+pub struct BuiltField {
+    /// The field (positive inside, distances in millimetres for meshes and
+    /// scans).
+    pub field: Arc<dyn Field>,
+    /// A box holding the field's solid.
+    pub bounds: Bounds,
+    /// Warnings for the user.
+    pub notes: Vec<String>,
+}
+
+/// Builds the field of a mesh, scan or data source.
+pub fn field(
+    src: &Source,
+    kind: SourceKind,
+    memory_limit: u64,
+    progress: Progress,
+) -> Result<BuiltField, LoadError> {
+    let path = Path::new(&src.path);
+    match kind {
+        SourceKind::Mesh => mesh_field(src, path, memory_limit, progress),
+        SourceKind::Scan => scan_field(src, path, memory_limit, progress),
+        SourceKind::Data => {
+            src.check_keys(&["mode"])?;
+            let mode = match src.options.get("mode").map(String::as_str) {
+                None | Some("interpolate") => microfrep_graded::csv::CsvMode::Interpolate,
+                Some("weights") => microfrep_graded::csv::CsvMode::Weights,
+                Some(m) => return Err(src.bad(format!("mode={m}: use interpolate or weights"))),
+            };
+            let b = microfrep_graded::csv::read_csv(path, mode)?;
+            let (lo, hi) = b.bounds();
+            let bounds = Bounds::new(lo, hi);
+            Ok(BuiltField {
+                field: Arc::new(b),
+                bounds,
+                notes: Vec::new(),
+            })
+        }
+        SourceKind::HyperFun | SourceKind::Example => {
+            Err(src.bad("not a data source (a mesh, a scan or a .csv)".into()))
+        }
+    }
+}
+
+fn mesh_field(
+    src: &Source,
+    path: &Path,
+    memory_limit: u64,
+    progress: Progress,
+) -> Result<BuiltField, LoadError> {
+    use microfrep_meshfield::{BuildOptions, MeshField, SignMethod, TriMesh};
+    src.check_keys(&["weld", "sign"])?;
+    let mesh = if src.path.to_ascii_lowercase().ends_with(".3mf") {
+        let parts = microfrep_3mf::read_meshes(path)?;
+        let mut v = Vec::new();
+        let mut t = Vec::new();
+        for p in parts {
+            let base = v.len() as u32;
+            v.extend(p.vertices);
+            t.extend(p.triangles.iter().map(|tri| tri.map(|i| i + base)));
+        }
+        TriMesh::new(v, t).map_err(|e| LoadError::MeshField {
+            path: path.to_path_buf(),
+            source: e,
+        })?
+    } else {
+        let opts = microfrep_meshfield::read::ReadOptions { memory_limit };
+        microfrep_meshfield::read::read_mesh_with(path, &opts)?
+    };
+    let weld = src.number("weld")?.unwrap_or(0.0);
+    if weld < 0.0 {
+        return Err(src.bad(format!("weld={weld} must not be negative")));
+    }
+    let (mesh, _) = mesh.weld(weld);
+    let sign = match src.options.get("sign").map(String::as_str) {
+        None | Some("auto") => SignMethod::Auto,
+        Some("winding") => SignMethod::Winding,
+        Some("normal") => SignMethod::PseudoNormal,
+        Some(s) => return Err(src.bad(format!("sign={s}: use auto, winding or normal"))),
+    };
+    let opts = BuildOptions {
+        name: path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "mesh".into()),
+        sign,
+        memory_limit,
+        ..BuildOptions::default()
+    };
+    let f =
+        MeshField::build(&mesh, &opts, &|d, t| progress("mesh hierarchy", d, t)).map_err(|e| {
+            LoadError::MeshField {
+                path: path.to_path_buf(),
+                source: e,
+            }
+        })?;
+    let mut notes = f.topology().warnings();
+    if f.flipped() > 0 {
+        notes.push(format!(
+            "{} triangles were flipped to make the orientation consistent",
+            f.flipped()
+        ));
+    }
+    let bb = f.bbox();
+    // A little room around the part, so its faces are inside the box.
+    let pad: [f64; 3] = std::array::from_fn(|a| 1e-3 * (bb[1][a] - bb[0][a]).max(1e-9));
+    let bounds = Bounds::new(
+        std::array::from_fn(|a| bb[0][a] - pad[a]),
+        std::array::from_fn(|a| bb[1][a] + pad[a]),
+    );
+    Ok(BuiltField {
+        field: Arc::new(f),
+        bounds,
+        notes,
+    })
+}
+
+fn scan_field(
+    src: &Source,
+    path: &Path,
+    memory_limit: u64,
+    progress: Progress,
+) -> Result<BuiltField, LoadError> {
+    use microfrep_scan::{ReadOptions, ScanField, ScanOptions, Volume};
+    src.check_keys(&["iso", "smooth", "spacing", "step", "series"])?;
+    let iso = src.number("iso")?.ok_or_else(|| {
+        src.bad(
+            "a scan needs its iso value: the intensity at and above which a voxel is inside, \
+             e.g. :iso=300 for bone in CT (Hounsfield units) or :iso=0.5 for occupancy"
+                .into(),
+        )
+    })?;
+    let mut ro = ReadOptions {
+        memory_limit,
+        ..ReadOptions::default()
+    };
+    if let Some(s) = src.options.get("spacing") {
+        let v: Vec<f64> = s
+            .split([',', 'x'])
+            .map(|t| t.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| src.bad(format!("spacing={s}: expected X,Y,Z in mm")))?;
+        let v = match v.as_slice() {
+            [a] => [*a; 3],
+            [a, b, c] => [*a, *b, *c],
+            _ => return Err(src.bad(format!("spacing={s}: expected X,Y,Z in mm"))),
+        };
+        if v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+            return Err(src.bad(format!("spacing={s}: spacings must be positive")));
+        }
+        ro.spacing = Some(v);
+    }
+    if let Some(s) = src.number("step")? {
+        if !(s >= 1.0 && s.fract() == 0.0 && s <= 64.0) {
+            return Err(src.bad(format!("step={s}: a whole number from 1 to 64")));
+        }
+        ro.step = s as usize;
+    }
+    ro.series = src.options.get("series").cloned();
+    let vol = Volume::open_with_progress(path, &ro, &|d, t| progress("reading scan", d, t))?;
+    let mut so = ScanOptions::new(iso);
+    so.smooth = src.number("smooth")?.unwrap_or(0.0);
+    so.memory_limit = memory_limit;
+    let f =
+        ScanField::build_with_progress(&vol, &so, &|d, t| progress("distance transform", d, t))?;
+    let b = f.bounds();
+    Ok(BuiltField {
+        bounds: Bounds::new(b[0], b[1]),
+        field: f.into_field(),
+        notes: Vec::new(),
+    })
+}
+
+/// The expression of a bound field at `(x, y, z)`, for Rust models.
+pub fn field_expr(f: &BuiltField) -> Expr {
+    Expr::field(f.field.clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sources_parse_with_and_without_options() {
+        let s = Source::parse("bone.nrrd:iso=300,smooth=0.5").unwrap();
+        assert_eq!(s.path, "bone.nrrd");
+        assert_eq!(s.options["iso"], "300");
+        assert_eq!(s.options["smooth"], "0.5");
+        let s = Source::parse("dir/a:b.stl").unwrap();
+        assert_eq!(s.path, "dir/a:b.stl");
+        assert!(s.options.is_empty());
+        assert!(Source::parse("x.stl:weld").unwrap().options.is_empty());
+        assert!(Source::parse("x.stl:weld=1,sign").is_err());
+    }
+
+    #[test]
+    fn unknown_names_list_the_examples() {
+        let e = load("no-such-model", &LoadOptions::default())
+            .err()
+            .unwrap();
+        let t = e.to_string();
+        assert!(t.contains("toriball"), "{t}");
+        let e = load(
+            "toriball",
+            &LoadOptions {
+                object: Some("x".into()),
+                ..Default::default()
+            },
+        )
+        .err()
+        .unwrap();
+        assert!(e.to_string().contains("HyperFun"), "{e}");
+    }
+}
