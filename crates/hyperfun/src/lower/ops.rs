@@ -133,8 +133,12 @@ pub fn builtin(name: &str, a: &[Expr]) -> Option<(Expr, Vec<Fault>)> {
         ("int", 1) => one(x.trunc()),
         ("frac", 1) => one(x - x.trunc()),
         ("mod", 2) => one(hf_round(x).rem(hf_round(&a[1]))),
-        ("max", 2) => one(Expr::select(x.gt(&a[1]), x.clone(), a[1].clone())),
-        ("min", 2) => one(Expr::select(x.lt(&a[1]), x.clone(), a[1].clone())),
+        // The reference's `x > y ? x : y` is `max` wherever no argument is
+        // NaN (NaN values come only from run-time errors, which the error
+        // output reports); as min/max nodes they keep tight interval
+        // bounds and per-region simplification.
+        ("max", 2) => one(x.max(&a[1])),
+        ("min", 2) => one(x.min(&a[1])),
         ("atan2", 2) => one(x.atan2(&a[1])),
         _ => None,
     }
