@@ -4,8 +4,9 @@
 use crate::cubemap::{gauge_lipschitz, CubeMap};
 use crate::curve::{Quad, P2};
 use crate::error::PoreError;
-use crate::field::{candidates, Pore2, Pore3, PoreField, Pores as FieldPores};
+use crate::field::{neighbours, CellBox, Index, Pore3, PoreField, Pores as FieldPores};
 use crate::pore2::{self, MAX_KAPPA};
+use crate::pore3::TEXELS;
 use crate::pore3::{self, KAPPA};
 use crate::rng::Rng;
 use crate::tree::{Cell, CellInfo, Params, Split, Subdivision, Tree};
@@ -412,14 +413,14 @@ impl Pores {
                 let pores = solved
                     .iter()
                     .map(|p| match &p.shape {
-                        PoreShape::Two { arcs, .. } => Some(Pore2 { arcs: *arcs }),
+                        PoreShape::Two { arcs, .. } => Some(*arcs),
                         _ => None,
                     })
                     .collect();
-                (solved, FieldPores::Two(pores), 0)
+                (solved, Raw::Two(pores), 0)
             }
             Dim::Three => {
-                let solved: Vec<Result<(PoreCell, Option<Pore3>, bool), PoreError>> = tree
+                let solved: Vec<Result<Solved3, PoreError>> = tree
                     .cells
                     .par_iter()
                     .zip(&targets)
@@ -439,7 +440,7 @@ impl Pores {
                     pores.push(p);
                     reg += r as usize;
                 }
-                (cells, FieldPores::Three(pores), reg)
+                (cells, Raw::Three(pores), reg)
             }
         };
         let pore_count = cells
@@ -456,20 +457,55 @@ impl Pores {
             }
         }
         let cap = 0.5 * min_side;
+        let boxes: Vec<CellBox> = tree
+            .cells
+            .iter()
+            .map(|c| CellBox {
+                c: c.center(),
+                h: c.half(),
+            })
+            .collect();
         let mut lip = 1.0f64;
-        if let FieldPores::Three(v) = &field_pores {
-            for p in v.iter().flatten() {
-                let (rmin, _, su, sv) = p.table.stats();
-                let rmean = p.m / (p.lambda * min_half(&p.inv_half));
-                lip = lip.max(rmean * gauge_lipschitz(rmin, su, sv));
+        let mut tables: Vec<f32> = Vec::new();
+        let pores = match field_pores {
+            Raw::Two(v) => FieldPores::Two(v),
+            Raw::Three(v) => {
+                // The regular table first, shared by every regular pore.
+                let regular = pore3::shared().regular.clone();
+                tables.extend_from_slice(regular.values());
+                let mut out = Vec::with_capacity(v.len());
+                for (i, p) in v.into_iter().enumerate() {
+                    out.push(p.map(|(table, lambda)| {
+                        let (rmin, _, su, sv) = table.stats();
+                        let rmean = mean(&table);
+                        let h = boxes[i].h;
+                        let hmin = h[0].min(h[1]).min(h[2]);
+                        lip = lip.max(rmean * gauge_lipschitz(rmin, su, sv));
+                        let offset = if Arc::ptr_eq(&table, &regular) {
+                            0
+                        } else {
+                            tables.extend_from_slice(table.values());
+                            tables.len() - table.values().len()
+                        };
+                        let m = lambda * rmean * hmin;
+                        Pore3 {
+                            inv_half: h.map(|v| 1.0 / v),
+                            k: m / lambda,
+                            m,
+                            offset,
+                        }
+                    }));
+                }
+                FieldPores::Three(out)
             }
-        }
+        };
         let lip = lip * (1.0 + 1e-6);
         let has_pore: Vec<bool> = cells
             .iter()
             .map(|c| !matches!(c.shape, PoreShape::None))
             .collect();
-        let (cand_start, cand) = candidates(&tree, cap, &|c| has_pore[c as usize]);
+        let (own, cand_start, cand, leaf_box) = neighbours(&tree, cap, &|c| has_pore[c as usize]);
+        let index = Index::new(&tree);
         let dropped = tree.dropped;
         let name = format!(
             "kou-tan pores ({dim}D, {pore_count} pores, {} cells, seed {seed})",
@@ -479,9 +515,15 @@ impl Pores {
             name,
             dim,
             tree,
+            index,
+            own,
             cand_start,
             cand,
-            pores: field_pores,
+            leaf_box,
+            boxes,
+            pores,
+            texels: TEXELS,
+            tables,
             cap,
             lip,
             floor: -max_half,
@@ -524,10 +566,6 @@ impl Pores {
     }
 }
 
-fn min_half(inv_half: &[f64; 3]) -> f64 {
-    1.0 / inv_half.iter().fold(0.0f64, |m, &v| m.max(v))
-}
-
 fn solve_2d(c: &Cell, target: f64, kappa: f64, sigma: f64, seed: u64, i: usize) -> PoreCell {
     if target == 0.0 {
         return PoreCell {
@@ -559,7 +597,13 @@ fn solve_2d(c: &Cell, target: f64, kappa: f64, sigma: f64, seed: u64, i: usize) 
     }
 }
 
-type Solved3 = (PoreCell, Option<Pore3>, bool);
+type Solved3 = (PoreCell, Option<(Arc<CubeMap>, f64)>, bool);
+
+/// Pores as solved, before the field is assembled.
+enum Raw {
+    Two(Vec<Option<[Quad; 4]>>),
+    Three(Vec<Option<(Arc<CubeMap>, f64)>>),
+}
 
 fn solve_3d(
     c: &Cell,
@@ -588,20 +632,7 @@ fn solve_3d(
         at: c.center(),
         why: "no irregularity down to 0 meets the porosity within the rules",
     })?;
-    let center = c.center();
-    let half = c.half();
-    let vertices = pore3::derived_polyhedron(center, half, kappa, &s.t);
-    let rmean = mean(&s.table);
-    let hmin = half.iter().fold(f64::INFINITY, |m, &v| m.min(v));
-    let m = s.lambda * rmean * hmin;
-    let pore = Pore3 {
-        center,
-        inv_half: half.map(|h| 1.0 / h),
-        lambda: s.lambda,
-        k: m / s.lambda,
-        m,
-        table: s.table.clone(),
-    };
+    let vertices = pore3::derived_polyhedron(c.center(), c.half(), kappa, &s.t);
     Ok((
         PoreCell {
             cell: *c,
@@ -614,7 +645,7 @@ fn solve_3d(
                 irregularity: s.sigma,
             },
         },
-        Some(pore),
+        Some((s.table, s.lambda)),
         s.sigma < sigma,
     ))
 }

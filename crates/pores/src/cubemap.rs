@@ -30,7 +30,8 @@ pub fn locate(y: [f64; 3]) -> (usize, f64, f64) {
     };
     let (b, c) = other_axes(m);
     let f = 2 * m + (y[m] < 0.0) as usize;
-    (f, y[b] / a[m], y[c] / a[m])
+    let inv = 1.0 / a[m];
+    (f, y[b] * inv, y[c] * inv)
 }
 
 /// The (unnormalised) direction of face coordinates `(u, v)` on face `f`.
@@ -151,46 +152,19 @@ impl CubeMap {
         }
     }
 
-    /// Texel and local coordinates of a face coordinate.
+    /// A borrowed view of the table.
     #[inline]
-    fn cell(&self, u: f64) -> (usize, f64) {
-        let t = (u + 1.0) * 0.5 * self.n as f64;
-        let i = (t.floor().max(0.0) as usize).min(self.n - 1);
-        (i, t - i as f64)
+    pub fn view(&self) -> View<'_> {
+        View {
+            n: self.n,
+            values: &self.values,
+        }
     }
 
     /// Radius and its derivatives in the direction of `y` (not zero).
     #[inline]
     pub fn sample(&self, y: [f64; 3]) -> Sample {
-        let (face, u, v) = locate(y);
-        self.sample_face(face, u, v)
-    }
-
-    /// Radius and derivatives at face coordinates.
-    #[inline]
-    pub fn sample_face(&self, face: usize, u: f64, v: f64) -> Sample {
-        let (i, tu) = self.cell(u);
-        let (j, tv) = self.cell(v);
-        let k = self.index(face, i, j);
-        let w = self.n + 1;
-        let r00 = self.values[k] as f64;
-        let r10 = self.values[k + 1] as f64;
-        let r01 = self.values[k + w] as f64;
-        let r11 = self.values[k + w + 1] as f64;
-        let a = r00 + (r10 - r00) * tu;
-        let b = r01 + (r11 - r01) * tu;
-        let r = a + (b - a) * tv;
-        let h = 0.5 * self.n as f64;
-        let ru = ((r10 - r00) * (1.0 - tv) + (r11 - r01) * tv) * h;
-        let rv = (b - a) * h;
-        Sample {
-            face,
-            u,
-            v,
-            r,
-            ru,
-            rv,
-        }
+        self.view().sample(y)
     }
 
     /// Bounds of the table: smallest value, largest value, and the largest
@@ -221,26 +195,115 @@ impl CubeMap {
     }
 }
 
+/// A borrowed table: `n` texels per side, `6 (n + 1)^2` values.
+#[derive(Clone, Copy, Debug)]
+pub struct View<'a> {
+    /// Texels per face side.
+    pub n: usize,
+    /// Values, as in [`CubeMap::values`].
+    pub values: &'a [f32],
+}
+
+impl View<'_> {
+    /// Texel and local coordinate of a face coordinate.
+    #[inline]
+    fn cell(&self, u: f64) -> (usize, f64) {
+        let t = (u + 1.0) * 0.5 * self.n as f64;
+        let i = (t.floor().max(0.0) as usize).min(self.n - 1);
+        (i, t - i as f64)
+    }
+
+    /// Radius and its derivatives in the direction of `y` (not zero).
+    #[inline]
+    pub fn sample(&self, y: [f64; 3]) -> Sample {
+        let (face, u, v) = locate(y);
+        self.sample_face(face, u, v)
+    }
+
+    /// Radius and derivatives at face coordinates.
+    #[inline]
+    pub fn sample_face(&self, face: usize, u: f64, v: f64) -> Sample {
+        let (i, tu) = self.cell(u);
+        let (j, tv) = self.cell(v);
+        let w = self.n + 1;
+        let k = (face * w + j) * w + i;
+        let r00 = self.values[k] as f64;
+        let r10 = self.values[k + 1] as f64;
+        let r01 = self.values[k + w] as f64;
+        let r11 = self.values[k + w + 1] as f64;
+        let a = r00 + (r10 - r00) * tu;
+        let b = r01 + (r11 - r01) * tu;
+        let r = a + (b - a) * tv;
+        let h = 0.5 * self.n as f64;
+        let ru = ((r10 - r00) * (1.0 - tv) + (r11 - r01) * tv) * h;
+        let rv = (b - a) * h;
+        Sample {
+            face,
+            u,
+            v,
+            r,
+            ru,
+            rv,
+        }
+    }
+
+    /// The gauge value only (see [`gauge`]), the hot path.
+    #[inline]
+    pub fn gauge_value(&self, y: [f64; 3]) -> f64 {
+        let a = [y[0].abs(), y[1].abs(), y[2].abs()];
+        let len = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
+        if len == 0.0 {
+            return 0.0;
+        }
+        let (m, b, c) = if a[0] >= a[1] && a[0] >= a[2] {
+            (0, 1, 2)
+        } else if a[1] >= a[2] {
+            (1, 0, 2)
+        } else {
+            (2, 0, 1)
+        };
+        let inv = 1.0 / a[m];
+        let face = 2 * m + (y[m] < 0.0) as usize;
+        let (i, tu) = self.cell(y[b] * inv);
+        let (j, tv) = self.cell(y[c] * inv);
+        let w = self.n + 1;
+        let k = (face * w + j) * w + i;
+        let r00 = self.values[k] as f64;
+        let r10 = self.values[k + 1] as f64;
+        let r01 = self.values[k + w] as f64;
+        let r11 = self.values[k + w + 1] as f64;
+        let lo = r00 + (r10 - r00) * tu;
+        let hi = r01 + (r11 - r01) * tu;
+        len / (lo + (hi - lo) * tv)
+    }
+
+    /// Gauge and gradient (see [`gauge`]).
+    #[inline]
+    pub fn gauge(&self, y: [f64; 3]) -> (f64, [f64; 3]) {
+        let len = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
+        if len == 0.0 {
+            return (0.0, [0.0; 3]);
+        }
+        let s = self.sample(y);
+        let g = len / s.r;
+        let (m, sign) = face_axis(s.face);
+        let (b, c) = other_axes(m);
+        let am = y[m].abs();
+        // grad u = (e_b - u sign e_m) / |y_m|, likewise v with e_c.
+        let k = len / (s.r * s.r * am);
+        let mut grad = [y[0] / (len * s.r), y[1] / (len * s.r), y[2] / (len * s.r)];
+        grad[b] -= k * s.ru;
+        grad[c] -= k * s.rv;
+        grad[m] += k * sign * (s.ru * s.u + s.rv * s.v);
+        (g, grad)
+    }
+}
+
 /// Gauge `g(y) = |y| / R(y / |y|)` of a star body (`g < 1` inside) and its
 /// gradient; `g(0) = 0` with gradient 0 there.
 #[inline]
 pub fn gauge(map: &CubeMap, y: [f64; 3]) -> (f64, [f64; 3]) {
-    let len = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
-    if len == 0.0 {
-        return (0.0, [0.0; 3]);
-    }
-    let s = map.sample(y);
-    let g = len / s.r;
-    let (m, sign) = face_axis(s.face);
-    let (b, c) = other_axes(m);
-    let am = y[m].abs();
-    // grad u = (e_b - u sign e_m) / |y_m|, likewise v with e_c.
-    let k = len / (s.r * s.r * am);
-    let mut grad = [y[0] / (len * s.r), y[1] / (len * s.r), y[2] / (len * s.r)];
-    grad[b] -= k * s.ru;
-    grad[c] -= k * s.rv;
-    grad[m] += k * sign * (s.ru * s.u + s.rv * s.v);
-    (g, grad)
+    map.view().gauge(y)
 }
 
 /// A bound on `|grad g|` for a table with the given [`CubeMap::stats`].

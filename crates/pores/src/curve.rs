@@ -332,9 +332,20 @@ pub fn clipped_area(arcs: &[Quad], lo: P2, hi: P2) -> f64 {
 /// Signed distance to a closed counter-clockwise chain of arcs, positive
 /// inside, with its gradient.
 pub fn signed_distance(arcs: &[Quad; 4], q: P2) -> (f64, P2) {
-    let mut best = (f64::INFINITY, 0usize, 0.0);
+    // Each arc lies in its control triangle: the distance to the triangle
+    // bounds the distance to the arc from below. Arcs are solved nearest
+    // bound first, and skipped once the bound exceeds the best so far.
+    let mut bound = [(0.0f64, 0usize); 4];
     for (k, a) in arcs.iter().enumerate() {
-        let (t, d2) = a.closest(q);
+        bound[k] = (triangle_distance2(a.p, q), k);
+    }
+    bound.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut best = (f64::INFINITY, 0usize, 0.0);
+    for &(b2, k) in &bound {
+        if b2 >= best.0 {
+            break;
+        }
+        let (t, d2) = arcs[k].closest(q);
         if d2 < best.0 {
             best = (d2, k, t);
         }
@@ -360,4 +371,31 @@ pub fn signed_distance(arcs: &[Quad; 4], q: P2) -> (f64, P2) {
     }
     let s = if side >= 0.0 { 1.0 } else { -1.0 };
     (s * d, [s * v[0] / d, s * v[1] / d])
+}
+
+/// Squared distance from `q` to the triangle `p` (0 inside).
+fn triangle_distance2(p: [P2; 3], q: P2) -> f64 {
+    let o = |a: P2, b: P2, c: P2| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    let area = o(p[0], p[1], p[2]);
+    let s0 = o(p[1], p[2], q);
+    let s1 = o(p[2], p[0], q);
+    let s2 = o(p[0], p[1], q);
+    if area != 0.0
+        && ((s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0 && area > 0.0)
+            || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0 && area < 0.0))
+    {
+        return 0.0;
+    }
+    let seg = |a: P2, b: P2| {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l = d[0] * d[0] + d[1] * d[1];
+        let t = if l > 0.0 {
+            (((q[0] - a[0]) * d[0] + (q[1] - a[1]) * d[1]) / l).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let e = [a[0] + t * d[0] - q[0], a[1] + t * d[1] - q[1]];
+        e[0] * e[0] + e[1] * e[1]
+    };
+    seg(p[0], p[1]).min(seg(p[1], p[2])).min(seg(p[2], p[0]))
 }

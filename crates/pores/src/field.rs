@@ -3,147 +3,369 @@
 //!
 //! Each cell `C` subtracts its own pore `P_C` (the paper's Boolean
 //! difference of the pore and the sub-region), so the pore space is the
-//! union of `C ∩ P_C` and the field is
+//! union of the `C ∩ P_C` and the field is
 //! `f = min(cap, min_C max(-c_C, -q_C))`, with `c_C` the distance-like
 //! function of the cell box (`min_i (h_i - |x_i - m_i|)`, positive inside)
 //! and `q_C` that of the pore (positive inside). It is continuous across
-//! cell faces (a min and max of continuous functions). A cell farther than
-//! `cap` (Chebyshev) from a point cannot bring `f` below `cap`, so each
-//! leaf of the subdivision keeps the list of cells within `cap` of it and a
-//! point costs one tree descent and a few pores.
+//! cell faces (a min and max of continuous functions).
+//!
+//! Evaluation in about constant time: a uniform index grid over the
+//! subdivided box points into the tree of splits, which gives the leaf of
+//! the point in a step or two. A cell farther than `cap` (Chebyshev) from a
+//! point cannot bring `f` below `cap`, so each leaf keeps the list of pore
+//! cells within `cap` of it; and a neighbour `D` of the point's own cell
+//! `C` gives at least the point's distance `c_C(x)` to the faces of `C`, so
+//! once the own pore gives `f <= c_C(x)` (inside the pore, or nearer to it
+//! than to the cell's faces) the neighbours are not visited at all.
 //!
 //! Bounds: every term is Lipschitz (the box functions with constant 1, the
-//! pores with the constant of their table or 1 for the 2D signed
-//! distances), so over a box with centre `c` and half-diagonal `r`,
+//! 2D signed distances with 1, the 3D pores with the constant of their
+//! table), so over a box with centre `c` and half-diagonal `r`,
 //! `f in f(c) +- L r`, clamped to `[floor, cap]` where `floor` is minus the
 //! largest cell half-extent; boxes with no pore cell within `cap` are
-//! exactly `cap`.
+//! exactly `cap`. Partial derivatives lie in `[-L, L]`.
 
-use crate::cubemap::{gauge, CubeMap};
+use crate::cubemap::View;
 use crate::curve::{signed_distance, Quad};
-use crate::tree::{Tree, NONE};
+use crate::tree::{Node, Tree, NONE};
 use microfrep_core::{Field, Interval};
-use std::sync::Arc;
 
-/// A 3D pore in the field.
-#[derive(Clone, Debug)]
+/// A 3D pore: `-q = k g(y) - m` with `y = (x - centre) * inv_half` and `g`
+/// the gauge of the table at `offset`.
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Pore3 {
-    pub center: [f64; 3],
     pub inv_half: [f64; 3],
-    pub lambda: f64,
-    /// `m / lambda`, with `m = lambda R_mean h_min` the scale that makes
-    /// `q = m (1 - g / lambda)` about a distance near the surface.
+    /// `m / lambda`.
     pub k: f64,
+    /// `lambda R_mean h_min`: makes `q` about a distance near the surface.
     pub m: f64,
-    pub table: Arc<CubeMap>,
-}
-
-/// A 2D pore in the field.
-#[derive(Clone, Debug)]
-pub(crate) struct Pore2 {
-    pub arcs: [Quad; 4],
+    /// Start of the pore's table in [`PoreField::tables`].
+    pub offset: usize,
 }
 
 #[derive(Clone, Debug)]
 pub(crate) enum Pores {
-    Two(Vec<Option<Pore2>>),
+    Two(Vec<Option<[Quad; 4]>>),
     Three(Vec<Option<Pore3>>),
 }
 
+/// Centre and half extents of a cell.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CellBox {
+    pub c: [f64; 3],
+    pub h: [f64; 3],
+}
+
 /// The pore structure of a part: `f >= 0` in the solid between the pores
-/// (intersect it with the part, [`PoreField::solid`], for the porous part).
+/// (intersect it with the part, [`crate::Built::solid`], for the porous
+/// part).
 #[derive(Debug)]
 pub struct PoreField {
     pub(crate) name: String,
     pub(crate) dim: usize,
     pub(crate) tree: Tree,
-    /// Per leaf of the tree: range into `cand`.
+    pub(crate) index: Index,
+    /// Per leaf: its own cell if that has a pore, else NONE.
+    pub(crate) own: Vec<u32>,
+    /// Per leaf and side (x-, x+, y-, y+, z-, z+): range into `cand` of the
+    /// other pore cells within `cap` beyond that side of the leaf (a cell
+    /// beyond an edge or corner is listed under each of its sides).
     pub(crate) cand_start: Vec<u32>,
     pub(crate) cand: Vec<u32>,
+    /// Leaf boxes (the same as the tree's), for the side distances.
+    pub(crate) leaf_box: Vec<CellBox>,
+    pub(crate) boxes: Vec<CellBox>,
     pub(crate) pores: Pores,
+    /// Texels per face side of the 3D tables.
+    pub(crate) texels: usize,
+    /// All 3D tables, one after the other.
+    pub(crate) tables: Vec<f32>,
     pub(crate) cap: f64,
     pub(crate) lip: f64,
     pub(crate) floor: f64,
 }
 
-impl PoreField {
-    #[inline]
-    fn leaf_of(&self, p: [f64; 3]) -> usize {
-        let [lo, hi] = self.tree.root_box();
-        let q: [f64; 3] = std::array::from_fn(|a| p[a].clamp(lo[a], hi[a]));
-        self.tree.locate(q) as usize
+/// A uniform grid over the root box; each entry is the deepest tree node
+/// holding the whole grid cell, where the descent starts.
+#[derive(Clone, Debug)]
+pub(crate) struct Index {
+    lo: [f64; 3],
+    inv: [f64; 3],
+    dims: [usize; 3],
+    start: Vec<u32>,
+}
+
+/// Most entries of the index grid.
+const INDEX_MAX: usize = 1 << 21;
+
+impl Index {
+    pub(crate) fn new(tree: &Tree) -> Index {
+        let [lo, hi] = tree.root_box();
+        let dim = tree.dim;
+        // Resolution of the smallest cell on each axis, within the limit.
+        let mut side = [f64::INFINITY; 3];
+        for c in &tree.leaves {
+            for a in 0..dim {
+                side[a] = side[a].min(c.1[a] - c.0[a]);
+            }
+        }
+        let mut dims = [1usize; 3];
+        for a in 0..dim {
+            dims[a] = ((hi[a] - lo[a]) / side[a]).round().clamp(1.0, 1e9) as usize;
+        }
+        while dims.iter().product::<usize>() > INDEX_MAX {
+            for d in dims.iter_mut().take(dim) {
+                *d = (*d).div_ceil(2);
+            }
+        }
+        let inv = std::array::from_fn(|a| dims[a] as f64 / (hi[a] - lo[a]));
+        let mut start = Vec::with_capacity(dims.iter().product());
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let ijk = [i, j, k];
+                    let glo: [f64; 3] = std::array::from_fn(|a| {
+                        lo[a] + (hi[a] - lo[a]) * ijk[a] as f64 / dims[a] as f64
+                    });
+                    let ghi: [f64; 3] = std::array::from_fn(|a| {
+                        lo[a] + (hi[a] - lo[a]) * (ijk[a] + 1) as f64 / dims[a] as f64
+                    });
+                    let mut n = 0usize;
+                    while let Node::Split { axis, at, kids } = tree.nodes[n] {
+                        let a = axis as usize;
+                        if ghi[a] <= at {
+                            n = kids[0] as usize;
+                        } else if glo[a] >= at {
+                            n = kids[1] as usize;
+                        } else {
+                            break;
+                        }
+                    }
+                    start.push(n as u32);
+                }
+            }
+        }
+        Index {
+            lo,
+            inv,
+            dims,
+            start,
+        }
     }
 
-    /// Value and gradient (the gradient of the active term).
-    fn value(&self, p: [f64; 3], want_grad: bool) -> (f64, [f64; 3]) {
+    /// The leaf holding `p` (inside the root box).
+    #[inline]
+    fn leaf(&self, tree: &Tree, p: [f64; 3]) -> usize {
+        let mut idx = 0;
+        let mut stride = 1;
+        for a in 0..3 {
+            let t = ((p[a] - self.lo[a]) * self.inv[a]).floor();
+            let i = (t.max(0.0) as usize).min(self.dims[a] - 1);
+            idx += i * stride;
+            stride *= self.dims[a];
+        }
+        let mut n = self.start[idx] as usize;
+        loop {
+            match tree.nodes[n] {
+                Node::Leaf(l) => return l as usize,
+                Node::Split { axis, at, kids } => {
+                    n = if p[axis as usize] < at {
+                        kids[0]
+                    } else {
+                        kids[1]
+                    } as usize;
+                }
+            }
+        }
+    }
+}
+
+impl PoreField {
+    /// The term `max(-c_C, -q_C)` of cell `c` at `p`, with its gradient if
+    /// asked, given `-c_C` and its axis.
+    #[inline]
+    fn term(&self, c: usize, p: [f64; 3], box_d: f64, axis: usize, grad: bool) -> (f64, [f64; 3]) {
+        let (nq, gq) = match &self.pores {
+            Pores::Three(v) => {
+                // Only pore cells are ever visited.
+                let pore = v[c].as_ref().expect("a pore cell");
+                let b = &self.boxes[c];
+                let y: [f64; 3] = std::array::from_fn(|a| (p[a] - b.c[a]) * pore.inv_half[a]);
+                let view = View {
+                    n: self.texels,
+                    values: &self.tables[pore.offset..pore.offset + 6 * (self.texels + 1).pow(2)],
+                };
+                if grad {
+                    let (g, dg) = view.gauge(y);
+                    (
+                        pore.k * g - pore.m,
+                        std::array::from_fn(|a| pore.k * dg[a] * pore.inv_half[a]),
+                    )
+                } else {
+                    (pore.k * view.gauge_value(y) - pore.m, [0.0; 3])
+                }
+            }
+            Pores::Two(v) => {
+                let arcs = v[c].as_ref().expect("a pore cell");
+                let (d, g) = signed_distance(arcs, [p[0], p[1]]);
+                (-d, [-g[0], -g[1], 0.0])
+            }
+        };
+        if box_d >= nq {
+            let mut g = [0.0; 3];
+            if grad {
+                g[axis] = if p[axis] >= self.boxes[c].c[axis] {
+                    1.0
+                } else {
+                    -1.0
+                };
+            }
+            (box_d, g)
+        } else {
+            (nq, gq)
+        }
+    }
+
+    /// The term's value only (the hot path of [`PoreField::value_only`]).
+    #[inline(always)]
+    fn term_value(&self, c: usize, p: [f64; 3], box_d: f64) -> f64 {
+        let nq = match &self.pores {
+            Pores::Three(v) => {
+                let Some(pore) = &v[c] else {
+                    return f64::INFINITY;
+                };
+                let b = &self.boxes[c];
+                let y: [f64; 3] = std::array::from_fn(|a| (p[a] - b.c[a]) * pore.inv_half[a]);
+                let view = View {
+                    n: self.texels,
+                    values: &self.tables[pore.offset..],
+                };
+                pore.k * view.gauge_value(y) - pore.m
+            }
+            Pores::Two(v) => {
+                let Some(arcs) = &v[c] else {
+                    return f64::INFINITY;
+                };
+                -signed_distance(arcs, [p[0], p[1]]).0
+            }
+        };
+        box_d.max(nq)
+    }
+
+    /// The value alone.
+    #[inline]
+    fn value_only(&self, p: [f64; 3]) -> f64 {
+        if p[0].is_nan() || p[1].is_nan() || p[2].is_nan() {
+            return f64::NAN;
+        }
+        let [lo, hi] = &self.tree.root_box_ref();
+        let q: [f64; 3] = std::array::from_fn(|a| p[a].clamp(lo[a], hi[a]));
+        let leaf = self.index.leaf(&self.tree, q);
+        let mut best = self.cap;
+        let own = self.own[leaf];
+        if own != NONE {
+            let bd = self.box_distance(own as usize, p).0;
+            best = best.min(self.term_value(own as usize, p, bd));
+            if best <= -bd {
+                return best;
+            }
+        }
+        let lb = &self.leaf_box[leaf];
+        for side in 0..2 * self.dim {
+            let a = side / 2;
+            // Distance from p to this side's plane (inwards positive):
+            // cells beyond it are at least that far.
+            let d = if side % 2 == 0 {
+                p[a] - (lb.c[a] - lb.h[a])
+            } else {
+                lb.c[a] + lb.h[a] - p[a]
+            };
+            if d >= best {
+                continue;
+            }
+            let k = leaf * 6 + side;
+            let (s, e) = (self.cand_start[k] as usize, self.cand_start[k + 1] as usize);
+            for &c in &self.cand[s..e] {
+                let bd = self.box_distance(c as usize, p).0;
+                if bd < best {
+                    best = best.min(self.term_value(c as usize, p, bd));
+                }
+            }
+        }
+        best
+    }
+
+    /// `-c_C(p)` (the Chebyshev distance outside the box, negative inside)
+    /// and the axis that decides it.
+    #[inline(always)]
+    fn box_distance(&self, c: usize, p: [f64; 3]) -> (f64, usize) {
+        let b = &self.boxes[c];
+        let mut d = f64::NEG_INFINITY;
+        let mut axis = 0;
+        for a in 0..self.dim {
+            let v = (p[a] - b.c[a]).abs() - b.h[a];
+            if v > d {
+                d = v;
+                axis = a;
+            }
+        }
+        (d, axis)
+    }
+
+    /// Value and gradient (the gradient of the deciding term).
+    #[inline]
+    fn value(&self, p: [f64; 3], grad: bool) -> (f64, [f64; 3]) {
         if p.iter().any(|v| v.is_nan()) {
             return (f64::NAN, [f64::NAN; 3]);
         }
-        let leaf = self.leaf_of(p);
-        let (s, e) = (
-            self.cand_start[leaf] as usize,
-            self.cand_start[leaf + 1] as usize,
-        );
+        let [lo, hi] = self.tree.root_box();
+        let q: [f64; 3] = std::array::from_fn(|a| p[a].clamp(lo[a], hi[a]));
+        let leaf = self.index.leaf(&self.tree, q);
         let mut best = self.cap;
-        let mut grad = [0.0; 3];
-        for &c in &self.cand[s..e] {
-            let cell = &self.tree.cells[c as usize];
-            // -c_C: the largest distance outside a face pair.
-            let mut box_d = f64::NEG_INFINITY;
-            let mut box_axis = 0;
-            for a in 0..self.dim {
-                let m = 0.5 * (cell.lo[a] + cell.hi[a]);
-                let h = 0.5 * (cell.hi[a] - cell.lo[a]);
-                let d = (p[a] - m).abs() - h;
-                if d > box_d {
-                    box_d = d;
-                    box_axis = a;
-                }
+        let mut g = [0.0; 3];
+        let own = self.own[leaf];
+        if own != NONE {
+            let (bd, axis) = self.box_distance(own as usize, p);
+            let (t, tg) = self.term(own as usize, p, bd, axis, grad);
+            if t < best {
+                best = t;
+                g = tg;
             }
-            if box_d >= best {
-                continue;
-            }
-            let (nq, gq) = match &self.pores {
-                Pores::Three(v) => match &v[c as usize] {
-                    Some(pore) => {
-                        let y: [f64; 3] =
-                            std::array::from_fn(|a| (p[a] - pore.center[a]) * pore.inv_half[a]);
-                        let (g, dg) = gauge(&pore.table, y);
-                        // -q = k g - m.
-                        (
-                            pore.k * g - pore.m,
-                            std::array::from_fn(|a| pore.k * dg[a] * pore.inv_half[a]),
-                        )
-                    }
-                    None => (f64::INFINITY, [0.0; 3]),
-                },
-                Pores::Two(v) => match &v[c as usize] {
-                    Some(pore) => {
-                        let (d, g) = signed_distance(&pore.arcs, [p[0], p[1]]);
-                        (-d, [-g[0], -g[1], 0.0])
-                    }
-                    None => (f64::INFINITY, [0.0; 3]),
-                },
-            };
-            let (term, g) = if box_d >= nq {
-                let mut g = [0.0; 3];
-                if want_grad {
-                    let m = 0.5 * (cell.lo[box_axis] + cell.hi[box_axis]);
-                    g[box_axis] = if p[box_axis] >= m { 1.0 } else { -1.0 };
-                }
-                (box_d, g)
-            } else {
-                (nq, gq)
-            };
-            if term < best {
-                best = term;
-                grad = g;
+            // Neighbours give at least the distance to this cell's faces.
+            if best <= -bd {
+                return (best, g);
             }
         }
-        (best, grad)
+        let lb = &self.leaf_box[leaf];
+        for side in 0..2 * self.dim {
+            let a = side / 2;
+            let d = if side % 2 == 0 {
+                p[a] - (lb.c[a] - lb.h[a])
+            } else {
+                lb.c[a] + lb.h[a] - p[a]
+            };
+            if d >= best {
+                continue;
+            }
+            let k = leaf * 6 + side;
+            let (s, e) = (self.cand_start[k] as usize, self.cand_start[k + 1] as usize);
+            for &c in &self.cand[s..e] {
+                let (bd, axis) = self.box_distance(c as usize, p);
+                if bd >= best {
+                    continue;
+                }
+                let (t, tg) = self.term(c as usize, p, bd, axis, grad);
+                if t < best {
+                    best = t;
+                    g = tg;
+                }
+            }
+        }
+        (best, g)
     }
 
-    /// The value cap (the field's largest value: solid far from any pore).
+    /// The value cap (the field's largest value: solid far from any pore),
+    /// half the smallest cell side.
     pub fn cap(&self) -> f64 {
         self.cap
     }
@@ -157,6 +379,28 @@ impl PoreField {
     pub fn dim(&self) -> usize {
         self.dim
     }
+
+    /// The subdivision.
+    pub fn tree(&self) -> &Tree {
+        &self.tree
+    }
+
+    /// Heap bytes held by the field (tables, tree, index, lists).
+    pub fn heap_bytes(&self) -> usize {
+        let pores = match &self.pores {
+            Pores::Two(v) => v.len() * std::mem::size_of::<Option<[Quad; 4]>>(),
+            Pores::Three(v) => v.len() * std::mem::size_of::<Option<Pore3>>(),
+        };
+        self.tables.len() * 4
+            + pores
+            + self.boxes.len() * std::mem::size_of::<CellBox>()
+            + (self.own.len() + self.cand_start.len() + self.cand.len() + self.index.start.len())
+                * 4
+            + self.leaf_box.len() * std::mem::size_of::<CellBox>()
+            + self.tree.nodes.len() * std::mem::size_of::<Node>()
+            + self.tree.leaves.len() * std::mem::size_of::<([f64; 3], [f64; 3], u32)>()
+            + self.tree.cells.len() * std::mem::size_of::<crate::tree::Cell>()
+    }
 }
 
 impl Field for PoreField {
@@ -165,7 +409,7 @@ impl Field for PoreField {
     }
 
     fn eval(&self, p: [f64; 3]) -> f64 {
-        self.value(p, false).0
+        self.value_only(p)
     }
 
     fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
@@ -180,17 +424,25 @@ impl Field for PoreField {
         let lo: [f64; 3] = std::array::from_fn(|a| b[a].lo);
         let hi: [f64; 3] = std::array::from_fn(|a| b[a].hi);
         // No pore cell within the cap: the field is the cap throughout.
-        let elo: [f64; 3] = std::array::from_fn(|a| if a < dim { lo[a] - self.cap } else { lo[a] });
-        let ehi: [f64; 3] = std::array::from_fn(|a| if a < dim { hi[a] + self.cap } else { hi[a] });
+        let [rlo, rhi] = self.tree.root_box();
+        let q: [f64; 3] = std::array::from_fn(|a| {
+            if a < dim {
+                (lo[a] - self.cap).max(rlo[a])
+            } else {
+                rlo[a]
+            }
+        });
+        let r: [f64; 3] = std::array::from_fn(|a| {
+            if a < dim {
+                (hi[a] + self.cap).min(rhi[a])
+            } else {
+                rhi[a]
+            }
+        });
         let has_pore = |c: u32| match &self.pores {
             Pores::Two(v) => v[c as usize].is_some(),
             Pores::Three(v) => v[c as usize].is_some(),
         };
-        let [rlo, rhi] = self.tree.root_box();
-        let q: [f64; 3] =
-            std::array::from_fn(|a| if a < dim { elo[a].max(rlo[a]) } else { rlo[a] });
-        let r: [f64; 3] =
-            std::array::from_fn(|a| if a < dim { ehi[a].min(rhi[a]) } else { rhi[a] });
         if (0..dim).any(|a| q[a] > r[a]) || !self.tree.any(q, r, &has_pore) {
             return Interval::point(self.cap);
         }
@@ -205,11 +457,9 @@ impl Field for PoreField {
         }
         let v = self.eval(c);
         let w = self.lip * rad;
-        let l = (v - w).max(self.floor);
-        let h = (v + w).min(self.cap);
         // Rounding in the value and the radius: widen slightly.
         let eps = 1e-12 * (v.abs() + w + self.cap);
-        Interval::new(l - eps, h + eps)
+        Interval::new((v - w).max(self.floor) - eps, (v + w).min(self.cap) + eps)
     }
 
     fn grad_interval(&self, _b: [Interval; 3]) -> [Interval; 3] {
@@ -223,36 +473,61 @@ impl Field for PoreField {
 
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
         for i in 0..out.len() {
-            out[i] = self.value([x[i] as f64, y[i] as f64, z[i] as f64], false).0 as f32;
+            out[i] = self.value_only([x[i] as f64, y[i] as f64, z[i] as f64]) as f32;
         }
     }
 }
 
-/// Candidate lists: for each leaf, the kept cells within `cap` of it
-/// (Chebyshev, on the subdivided axes).
-pub(crate) fn candidates(
+/// Per leaf: its own pore cell (or NONE), and per side of the leaf the
+/// other pore cells within `cap` of it (Chebyshev, on the subdivided axes)
+/// that lie beyond that side.
+pub(crate) fn neighbours(
     tree: &Tree,
     cap: f64,
     has_pore: &dyn Fn(u32) -> bool,
-) -> (Vec<u32>, Vec<u32>) {
-    let mut start = Vec::with_capacity(tree.leaves.len() + 1);
+) -> (Vec<u32>, Vec<u32>, Vec<u32>, Vec<CellBox>) {
+    let mut own = Vec::with_capacity(tree.leaves.len());
+    let mut start = Vec::with_capacity(6 * tree.leaves.len() + 1);
     let mut cand = Vec::new();
+    let mut boxes = Vec::with_capacity(tree.leaves.len());
+    let mut found = Vec::new();
     for &(lo, hi, cell) in &tree.leaves {
-        start.push(cand.len() as u32);
+        own.push(if cell != NONE && has_pore(cell) {
+            cell
+        } else {
+            NONE
+        });
+        boxes.push(CellBox {
+            c: std::array::from_fn(|a| 0.5 * (lo[a] + hi[a])),
+            h: std::array::from_fn(|a| 0.5 * (hi[a] - lo[a])),
+        });
         let elo: [f64; 3] = std::array::from_fn(|a| if a < tree.dim { lo[a] - cap } else { lo[a] });
         let ehi: [f64; 3] = std::array::from_fn(|a| if a < tree.dim { hi[a] + cap } else { hi[a] });
-        let first = cand.len();
-        // The leaf's own cell first: it usually decides, and prunes the rest.
-        if cell != NONE && has_pore(cell) {
-            cand.push(cell);
-        }
+        found.clear();
         tree.query(elo, ehi, &mut |c| {
             if c != cell && has_pore(c) {
-                cand.push(c);
+                found.push(c);
             }
         });
-        debug_assert!(cand.len() >= first);
+        for side in 0..6 {
+            start.push(cand.len() as u32);
+            let a = side / 2;
+            if a >= tree.dim {
+                continue;
+            }
+            for &c in &found {
+                let b = &tree.cells[c as usize];
+                let beyond = if side % 2 == 0 {
+                    b.hi[a] <= lo[a]
+                } else {
+                    b.lo[a] >= hi[a]
+                };
+                if beyond {
+                    cand.push(c);
+                }
+            }
+        }
     }
     start.push(cand.len() as u32);
-    (start, cand)
+    (own, start, cand, boxes)
 }

@@ -18,7 +18,7 @@
 
 use crate::cubemap::{gauge, quadrature, CubeMap, QuadPoint};
 use crate::doo_sabin::{corner_sign, limit_mesh, LimitMesh};
-use crate::raster::tabulate;
+use crate::raster::{tabulate, Walker};
 use std::sync::{Arc, OnceLock};
 
 /// Doo-Sabin steps before the limit mesh is tabulated.
@@ -37,6 +37,7 @@ const EDGE_SAMPLES: usize = 33;
 pub(crate) struct Shared {
     pub mesh: LimitMesh,
     pub tris: Vec<[u32; 3]>,
+    pub walker: Walker,
     pub quad: Vec<QuadPoint>,
     /// Points on the twelve edges of `[-1, 1]^3`.
     pub edges: Vec<[f64; 3]>,
@@ -73,10 +74,13 @@ pub(crate) fn shared() -> &'static Shared {
             }
         }
         let ctrl = control(&[[1.0; 3]; 8]);
-        let (regular, _) = tabulate(&mesh.positions(&ctrl), &tris, TEXELS)
+        let reference = mesh.positions(&ctrl);
+        let (regular, _) = tabulate(&reference, &tris, TEXELS)
             .expect("the cube's own Doo-Sabin surface surrounds its centre");
+        let walker = Walker::new(&reference, &tris, TEXELS);
         let mut s = Shared {
             mesh,
+            walker,
             tris,
             quad,
             edges,
@@ -209,8 +213,6 @@ pub(crate) struct Solved {
     pub lambda: f64,
     /// Irregularity used (after any reduction).
     pub sigma: f64,
-    /// Shape `b` used.
-    pub b: [[f64; 3]; 8],
     /// Eq. 9 parameters of the derived points.
     pub t: [[f64; 3]; 8],
     /// Porosity the table gives.
@@ -255,9 +257,9 @@ pub(crate) fn solve(target: f64, u: &[[f64; 3]; 8], sigma: f64, kappa: f64) -> O
         let table = if sig == 0.0 {
             s.regular.clone()
         } else {
-            match tabulate(&s.mesh.positions(&control(&b)), &s.tris, TEXELS) {
-                Some((m, r)) if r.conflicts == 0 => Arc::new(m),
-                _ => continue,
+            match tabulate_shape(&b) {
+                Some(m) => Arc::new(m),
+                None => continue,
             }
         };
         let rq = s.radii(&table);
@@ -282,13 +284,27 @@ pub(crate) fn solve(target: f64, u: &[[f64; 3]; 8], sigma: f64, kappa: f64) -> O
                 table,
                 lambda,
                 sigma: sig,
-                b,
                 t: t.map(|r| r.map(|x| x.clamp(0.0, 1.0))),
                 porosity,
             });
         }
     }
     None
+}
+
+/// The radial table of the Doo-Sabin surface of the shape `b` (control
+/// point `s` at `s * b_s` in cell coordinates): the limit mesh after
+/// [`LEVEL`] steps, tabulated on [`TEXELS`] texels per face side. `None`
+/// when the surface is not star-shaped around the centre.
+pub fn tabulate_shape(b: &[[f64; 3]; 8]) -> Option<CubeMap> {
+    let s = shared();
+    let pos = s.mesh.positions(&control(b));
+    s.walker
+        .tabulate(&pos)
+        .or_else(|| match tabulate(&pos, &s.tris, TEXELS) {
+            Some((m, r)) if r.conflicts == 0 => Some(m),
+            _ => None,
+        })
 }
 
 /// Random directions of a pore's vertices: `u` uniform in [-1, 1] per

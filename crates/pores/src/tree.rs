@@ -295,28 +295,15 @@ impl Tree {
         self.dropped
     }
 
+    #[inline]
+    pub(crate) fn root_box_ref(&self) -> [&[f64; 3]; 2] {
+        [&self.lo, &self.hi]
+    }
+
     /// The box subdivided (S0): the bounds, or the square / cube around
     /// them for [`Subdivision::Tree`].
     pub fn root_box(&self) -> [[f64; 3]; 2] {
         [self.lo, self.hi]
-    }
-
-    /// The leaf containing `p` (which must be in the root box).
-    #[inline]
-    pub(crate) fn locate(&self, p: [f64; 3]) -> u32 {
-        let mut n = 0usize;
-        loop {
-            match self.nodes[n] {
-                Node::Leaf(c) => return c,
-                Node::Split { axis, at, kids } => {
-                    n = if p[axis as usize] < at {
-                        kids[0]
-                    } else {
-                        kids[1]
-                    } as usize;
-                }
-            }
-        }
     }
 
     /// Calls `f` for every kept cell whose closed box meets `lo..hi`.
