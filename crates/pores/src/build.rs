@@ -293,7 +293,12 @@ fn check_bounds(b: [[f64; 3]; 2]) -> Result<(), PoreError> {
     }
 }
 
-/// Bounds of a part proven by interval analysis (as the mesher finds them).
+/// Bounds of a part proven by interval analysis (as the mesher finds
+/// them). Cells follow these bounds, so a part whose intervals are tight
+/// (a block of `min`s of slabs, HyperFun's `hfBlock`) gets cells that line
+/// up with it; where the bounds are looser the subdivision simply starts
+/// from a larger box (the part itself is unchanged: outside the subdivided
+/// box the field is solid).
 pub fn part_bounds(part: &Expr) -> Result<[[f64; 3]; 2], PoreError> {
     microfrep_mesh::bounds::model_bounds_of(part).map_err(PoreError::PartBounds)
 }

@@ -135,6 +135,11 @@ pub(crate) struct Params<'a> {
     pub max_cells: usize,
 }
 
+/// Cells up to this much larger (relative) than the requested size are
+/// not refined, so bounds found by interval analysis, a hair larger than
+/// the part, still give cells of the requested size.
+pub const SLACK: f64 = 1e-3;
+
 /// Deepest binary split allowed.
 pub const MAX_DEPTH: usize = 60;
 
@@ -424,7 +429,7 @@ fn decide(
         return Ok(s);
     }
     let ext: Vec<f64> = (0..p.dim).map(|a| hi[a] - lo[a]).collect();
-    let slack = 1.0 + 1e-9;
+    let slack = 1.0 + SLACK;
     Ok(match p.subdivision {
         Subdivision::Tree => {
             if ext.iter().any(|&e| e > size * slack) {
@@ -438,7 +443,7 @@ fn decide(
             if measure > size.powi(p.dim as i32) * slack {
                 let mut axis = 0;
                 for a in 1..p.dim {
-                    if ext[a] > ext[axis] * slack {
+                    if ext[a] > ext[axis] * (1.0 + 1e-9) {
                         axis = a;
                     }
                 }

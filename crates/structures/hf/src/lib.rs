@@ -12,6 +12,7 @@
 mod args;
 mod cells;
 mod pasko;
+mod pores;
 mod struts;
 mod tables;
 mod tpms;
@@ -27,6 +28,7 @@ pub fn register(r: &mut Registry) {
     cells::register(r);
     tpms::register(r);
     struts::register(r);
+    pores::register(r);
 }
 
 /// Installs the library into every standard HyperFun registry of this
