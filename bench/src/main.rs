@@ -6,6 +6,7 @@ mod analyze;
 mod eval;
 mod hyperfun;
 mod mesh;
+mod pores;
 mod slice;
 mod structures;
 mod to_fidget;
@@ -33,6 +34,10 @@ const SUITES: &[(&str, &str)] = &[
         "volume fractions achieved vs targets via the mf* HyperFun library, density-table cost",
     ),
     (
+        "pores",
+        "Kou-Tan bone (>1000 pores): build, mesh at 256^3, slicing vs a gyroid of the same cell",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -52,6 +57,7 @@ fn main() {
         "analyze" => analyze::run(),
         "eval" => eval::run(),
         "mesh" => mesh::run(),
+        "pores" => pores::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),

@@ -1,10 +1,10 @@
 //! The builder: subdivision, one pore per cell solved for its porosity,
 //! and the field.
 
-use crate::cubemap::{gauge_lipschitz, CubeMap};
+use crate::cubemap::CubeMap;
 use crate::curve::{Quad, P2};
 use crate::error::PoreError;
-use crate::field::{neighbours, CellBox, Index, Pore3, PoreField, Pores as FieldPores};
+use crate::field::{neighbours, CellBox, Fast3, Index, Pore3, PoreField, Pores as FieldPores};
 use crate::pore2::{self, MAX_KAPPA};
 use crate::pore3::TEXELS;
 use crate::pore3::{self, KAPPA};
@@ -121,6 +121,10 @@ pub struct Options {
     pub parent_scale: Option<f64>,
     /// Most cells the subdivision may make.
     pub max_cells: usize,
+    /// Most bytes the field may hold (the 3D pores' tables take about
+    /// 7 KiB a pore); a build predicted to need more is refused before the
+    /// pores are made.
+    pub memory_limit: u64,
 }
 
 impl Default for Options {
@@ -132,6 +136,7 @@ impl Default for Options {
             irregularity: 0.15,
             parent_scale: None,
             max_cells: 1 << 21,
+            memory_limit: 4 << 30,
         }
     }
 }
@@ -145,6 +150,7 @@ impl std::fmt::Debug for Options {
             .field("irregularity", &self.irregularity)
             .field("parent_scale", &self.parent_scale)
             .field("max_cells", &self.max_cells)
+            .field("memory_limit", &self.memory_limit)
             .finish()
     }
 }
@@ -362,6 +368,20 @@ impl Pores {
                 hi: bounds[1],
             });
         }
+        // Memory: per cell its record, box, fast data and lists, and in 3D
+        // (at most) a table per pore, plus the index grid.
+        let per_cell = match options.dim {
+            Dim::Two => 600,
+            Dim::Three => 600 + 4 * 6 * (TEXELS as u64 + 1).pow(2),
+        };
+        let need = per_cell * tree.cells.len() as u64 + 4 * (1 << 21);
+        if need > options.memory_limit {
+            return Err(PoreError::Memory {
+                cells: tree.cells.len(),
+                need,
+                limit: options.memory_limit,
+            });
+        }
         // Targets at the cell centres (2D: the middle of the z range).
         let por_s = Sampler::new(&porosity);
         let mut por = por_s.evaluator();
@@ -398,7 +418,7 @@ impl Pores {
         let done = std::sync::atomic::AtomicU64::new(0);
         let tick = || {
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if d % 64 == 0 || d == total {
+            if d.is_multiple_of(64) || d == total {
                 progress(d, total);
             }
         };
@@ -481,11 +501,10 @@ impl Pores {
                 let mut out = Vec::with_capacity(v.len());
                 for (i, p) in v.into_iter().enumerate() {
                     out.push(p.map(|(table, lambda)| {
-                        let (rmin, _, su, sv) = table.stats();
                         let rmean = mean(&table);
                         let h = boxes[i].h;
                         let hmin = h[0].min(h[1]).min(h[2]);
-                        lip = lip.max(rmean * gauge_lipschitz(rmin, su, sv));
+                        lip = lip.max(rmean * table.gauge_lipschitz());
                         let offset = if Arc::ptr_eq(&table, &regular) {
                             0
                         } else {
@@ -511,6 +530,21 @@ impl Pores {
             .collect();
         let (own, cand_start, cand, leaf_box) = neighbours(&tree, cap, &|c| has_pore[c as usize]);
         let index = Index::new(&tree);
+        let fast3 = match &pores {
+            FieldPores::Three(v) => v
+                .iter()
+                .zip(&boxes)
+                .map(|(p, b)| Fast3 {
+                    c: b.c,
+                    h: b.h,
+                    inv: b.h.map(|v| 1.0 / v),
+                    k: p.map_or(0.0, |p| p.k),
+                    m: p.map_or(0.0, |p| p.m),
+                    off: p.map_or(u32::MAX, |p| p.offset as u32),
+                })
+                .collect(),
+            FieldPores::Two(_) => Vec::new(),
+        };
         let dropped = tree.dropped;
         let name = format!(
             "kou-tan pores ({dim}D, {pore_count} pores, {} cells, seed {seed})",
@@ -529,6 +563,7 @@ impl Pores {
             pores,
             texels: TEXELS,
             tables,
+            fast3,
             cap,
             lip,
             floor: -max_half,

@@ -13,7 +13,7 @@ use crate::doo_sabin::other_axes;
 
 /// Face `f` of the cube map: axis `f / 2`, positive side for even `f`.
 pub fn face_axis(f: usize) -> (usize, f64) {
-    (f / 2, if f % 2 == 0 { 1.0 } else { -1.0 })
+    (f / 2, if f.is_multiple_of(2) { 1.0 } else { -1.0 })
 }
 
 /// The face a direction belongs to and its face coordinates `(u, v)`
@@ -208,8 +208,8 @@ impl View<'_> {
     /// Texel and local coordinate of a face coordinate.
     #[inline]
     fn cell(&self, u: f64) -> (usize, f64) {
-        let t = (u + 1.0) * 0.5 * self.n as f64;
-        let i = (t.floor().max(0.0) as usize).min(self.n - 1);
+        let t = (u + 1.0) * (0.5 * self.n as f64);
+        let i = (t as i64).clamp(0, self.n as i64 - 1) as usize;
         (i, t - i as f64)
     }
 
@@ -247,36 +247,6 @@ impl View<'_> {
         }
     }
 
-    /// The gauge value only (see [`gauge`]), the hot path.
-    #[inline]
-    pub fn gauge_value(&self, y: [f64; 3]) -> f64 {
-        let a = [y[0].abs(), y[1].abs(), y[2].abs()];
-        let len = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
-        if len == 0.0 {
-            return 0.0;
-        }
-        let (m, b, c) = if a[0] >= a[1] && a[0] >= a[2] {
-            (0, 1, 2)
-        } else if a[1] >= a[2] {
-            (1, 0, 2)
-        } else {
-            (2, 0, 1)
-        };
-        let inv = 1.0 / a[m];
-        let face = 2 * m + (y[m] < 0.0) as usize;
-        let (i, tu) = self.cell(y[b] * inv);
-        let (j, tv) = self.cell(y[c] * inv);
-        let w = self.n + 1;
-        let k = (face * w + j) * w + i;
-        let r00 = self.values[k] as f64;
-        let r10 = self.values[k + 1] as f64;
-        let r01 = self.values[k + w] as f64;
-        let r11 = self.values[k + w + 1] as f64;
-        let lo = r00 + (r10 - r00) * tu;
-        let hi = r01 + (r11 - r01) * tu;
-        len / (lo + (hi - lo) * tv)
-    }
-
     /// Gauge and gradient (see [`gauge`]).
     #[inline]
     pub fn gauge(&self, y: [f64; 3]) -> (f64, [f64; 3]) {
@@ -304,6 +274,39 @@ impl View<'_> {
 #[inline]
 pub fn gauge(map: &CubeMap, y: [f64; 3]) -> (f64, [f64; 3]) {
     map.view().gauge(y)
+}
+
+impl CubeMap {
+    /// A bound on `|grad g|` of the gauge `g(y) = |y| / R(y / |y|)`, per
+    /// texel and then the largest: with `s = |y| / |y_m|`,
+    /// `|grad g|^2 = 1 / R^2 + s^2 (R_u^2 + R_v^2 + (u R_u + v R_v)^2) / R^4`
+    /// (the second part is orthogonal to `y`), each factor bounded over the
+    /// texel by its corners (bilinear `R` stays within them, `R_u` within
+    /// its two u-edge differences).
+    pub fn gauge_lipschitz(&self) -> f64 {
+        let n = self.n;
+        let h = 0.5 * n as f64;
+        let mut worst = 0.0f64;
+        for f in 0..6 {
+            for j in 0..n {
+                for i in 0..n {
+                    let v = |a: usize, b: usize| self.values[self.index(f, i + a, j + b)] as f64;
+                    let (r00, r10, r01, r11) = (v(0, 0), v(1, 0), v(0, 1), v(1, 1));
+                    let rlo = r00.min(r10).min(r01).min(r11);
+                    let ru = (r10 - r00).abs().max((r11 - r01).abs()) * h;
+                    let rv = (r01 - r00).abs().max((r11 - r10).abs()) * h;
+                    let umax = self.coord(i).abs().max(self.coord(i + 1).abs());
+                    let vmax = self.coord(j).abs().max(self.coord(j + 1).abs());
+                    let s2 = 1.0 + umax * umax + vmax * vmax;
+                    let cross = ru * umax + rv * vmax;
+                    let g2 =
+                        1.0 / (rlo * rlo) + s2 * (ru * ru + rv * rv + cross * cross) / rlo.powi(4);
+                    worst = worst.max(g2);
+                }
+            }
+        }
+        worst.sqrt() * (1.0 + 1e-9)
+    }
 }
 
 /// A bound on `|grad g|` for a table with the given [`CubeMap::stats`].

@@ -228,8 +228,8 @@ fn solve_cubic(a: f64, b: f64, c: f64, d: f64, out: &mut [f64; 3]) -> usize {
     } else {
         let r = (-p / 3.0).sqrt();
         let phi = (3.0 * q / (2.0 * p) / r).clamp(-1.0, 1.0).acos() / 3.0;
-        for k in 0..3 {
-            out[k] = 2.0 * r * (phi - 2.0 * std::f64::consts::PI * k as f64 / 3.0).cos() + shift;
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = 2.0 * r * (phi - 2.0 * std::f64::consts::PI * k as f64 / 3.0).cos() + shift;
         }
         3
     }

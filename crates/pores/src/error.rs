@@ -59,6 +59,21 @@ pub enum PoreError {
         /// Centre of the cell being split.
         at: [f64; 3],
     },
+    /// The structure would need more memory than allowed.
+    #[error(
+        "{cells} cells need about {} MiB, over the limit of {} MiB; give a larger pore \
+         size or raise Options::memory_limit",
+        need >> 20,
+        limit >> 20
+    )]
+    Memory {
+        /// Cells made by the subdivision.
+        cells: usize,
+        /// Predicted bytes.
+        need: u64,
+        /// The limit.
+        limit: u64,
+    },
     /// Refinement would go deeper than the tree allows.
     #[error("subdivision deeper than {depth} splits (pore size {size} near {at:?})")]
     TooDeep {

@@ -43,6 +43,19 @@ pub(crate) struct Pore3 {
     pub offset: usize,
 }
 
+/// Everything the value of a 3D cell's term needs, in one place (the hot
+/// path): centre, half extents, their inverses, the pore's `k`, `m` and
+/// table offset (`u32::MAX`: no pore).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fast3 {
+    pub c: [f64; 3],
+    pub h: [f64; 3],
+    pub inv: [f64; 3],
+    pub k: f64,
+    pub m: f64,
+    pub off: u32,
+}
+
 #[derive(Clone, Debug)]
 pub(crate) enum Pores {
     Two(Vec<Option<[Quad; 4]>>),
@@ -80,6 +93,8 @@ pub struct PoreField {
     pub(crate) texels: usize,
     /// All 3D tables, one after the other.
     pub(crate) tables: Vec<f32>,
+    /// Per cell, for the 3D hot path (empty in 2D).
+    pub(crate) fast3: Vec<Fast3>,
     pub(crate) cap: f64,
     pub(crate) lip: f64,
     pub(crate) floor: f64,
@@ -99,6 +114,7 @@ pub(crate) struct Index {
 const INDEX_MAX: usize = 1 << 21;
 
 impl Index {
+    #[allow(clippy::needless_range_loop)]
     pub(crate) fn new(tree: &Tree) -> Index {
         let [lo, hi] = tree.root_box();
         let dim = tree.dim;
@@ -155,12 +171,13 @@ impl Index {
 
     /// The leaf holding `p` (inside the root box).
     #[inline]
+    #[allow(clippy::needless_range_loop)]
     fn leaf(&self, tree: &Tree, p: [f64; 3]) -> usize {
         let mut idx = 0;
         let mut stride = 1;
         for a in 0..3 {
-            let t = ((p[a] - self.lo[a]) * self.inv[a]).floor();
-            let i = (t.max(0.0) as usize).min(self.dims[a] - 1);
+            let t = (p[a] - self.lo[a]) * self.inv[a];
+            let i = (t as i64).clamp(0, self.dims[a] as i64 - 1) as usize;
             idx += i * stride;
             stride *= self.dims[a];
         }
@@ -195,15 +212,11 @@ impl PoreField {
                     n: self.texels,
                     values: &self.tables[pore.offset..pore.offset + 6 * (self.texels + 1).pow(2)],
                 };
-                if grad {
-                    let (g, dg) = view.gauge(y);
-                    (
-                        pore.k * g - pore.m,
-                        std::array::from_fn(|a| pore.k * dg[a] * pore.inv_half[a]),
-                    )
-                } else {
-                    (pore.k * view.gauge_value(y) - pore.m, [0.0; 3])
-                }
+                let (g, dg) = view.gauge(y);
+                (
+                    pore.k * g - pore.m,
+                    std::array::from_fn(|a| pore.k * dg[a] * pore.inv_half[a]),
+                )
             }
             Pores::Two(v) => {
                 let arcs = v[c].as_ref().expect("a pore cell");
@@ -226,33 +239,99 @@ impl PoreField {
         }
     }
 
-    /// The term's value only (the hot path of [`PoreField::value_only`]).
+    /// A 2D cell's term, value only.
     #[inline(always)]
-    fn term_value(&self, c: usize, p: [f64; 3], box_d: f64) -> f64 {
-        let nq = match &self.pores {
-            Pores::Three(v) => {
-                let Some(pore) = &v[c] else {
-                    return f64::INFINITY;
-                };
-                let b = &self.boxes[c];
-                let y: [f64; 3] = std::array::from_fn(|a| (p[a] - b.c[a]) * pore.inv_half[a]);
-                let view = View {
-                    n: self.texels,
-                    values: &self.tables[pore.offset..],
-                };
-                pore.k * view.gauge_value(y) - pore.m
-            }
-            Pores::Two(v) => {
-                let Some(arcs) = &v[c] else {
-                    return f64::INFINITY;
-                };
-                -signed_distance(arcs, [p[0], p[1]]).0
-            }
+    fn term2_value(&self, c: usize, p: [f64; 3], box_d: f64) -> f64 {
+        let Pores::Two(v) = &self.pores else {
+            unreachable!("2D terms of a 3D field")
         };
-        box_d.max(nq)
+        match &v[c] {
+            Some(arcs) => box_d.max(-signed_distance(arcs, [p[0], p[1]]).0),
+            None => f64::INFINITY,
+        }
     }
 
-    /// The value alone.
+    /// The 3D term of cell `c` at `p`: `max(-c_C, -q_C)` and `-c_C`.
+    #[inline(always)]
+    fn term3(&self, c: &Fast3, p: [f64; 3]) -> (f64, f64) {
+        let d = [p[0] - c.c[0], p[1] - c.c[1], p[2] - c.c[2]];
+        let bd = (d[0].abs() - c.h[0])
+            .max(d[1].abs() - c.h[1])
+            .max(d[2].abs() - c.h[2]);
+        if c.off == u32::MAX {
+            return (f64::INFINITY, bd);
+        }
+        let y = [d[0] * c.inv[0], d[1] * c.inv[1], d[2] * c.inv[2]];
+        let a = [y[0].abs(), y[1].abs(), y[2].abs()];
+        let len = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
+        if len == 0.0 {
+            return (bd.max(-c.m), bd);
+        }
+        let (m, b, cc) = if a[0] >= a[1] && a[0] >= a[2] {
+            (0, 1, 2)
+        } else if a[1] >= a[2] {
+            (1, 0, 2)
+        } else {
+            (2, 0, 1)
+        };
+        let n = self.texels;
+        let half = 0.5 * n as f64;
+        let inv = 1.0 / a[m];
+        let tu = (y[b] * inv + 1.0) * half;
+        let tv = (y[cc] * inv + 1.0) * half;
+        let i = (tu as i32).clamp(0, n as i32 - 1) as usize;
+        let j = (tv as i32).clamp(0, n as i32 - 1) as usize;
+        let (fu, fv) = (tu - i as f64, tv - j as f64);
+        let w = n + 1;
+        let face = 2 * m + (y[m] < 0.0) as usize;
+        let k = c.off as usize + (face * w + j) * w + i;
+        let t = &self.tables[k..k + w + 2];
+        let (r00, r10, r01, r11) = (t[0] as f64, t[1] as f64, t[w] as f64, t[w + 1] as f64);
+        let lo = r00 + (r10 - r00) * fu;
+        let hi = r01 + (r11 - r01) * fu;
+        let nq = c.k * (len / (lo + (hi - lo) * fv)) - c.m;
+        (bd.max(nq), bd)
+    }
+
+    /// The 3D value in a known leaf.
+    #[inline(always)]
+    fn value3(&self, p: [f64; 3], leaf: usize) -> f64 {
+        let mut best = self.cap;
+        let own = self.own[leaf];
+        if own != NONE {
+            let (t, bd) = self.term3(&self.fast3[own as usize], p);
+            best = best.min(t);
+            if best <= -bd {
+                return best;
+            }
+        }
+        let lb = &self.leaf_box[leaf];
+        for side in 0..6 {
+            let a = side / 2;
+            let d = if side % 2 == 0 {
+                p[a] - (lb.c[a] - lb.h[a])
+            } else {
+                lb.c[a] + lb.h[a] - p[a]
+            };
+            if d >= best {
+                continue;
+            }
+            let k = leaf * 6 + side;
+            let (s, e) = (self.cand_start[k] as usize, self.cand_start[k + 1] as usize);
+            for &c in &self.cand[s..e] {
+                let f = &self.fast3[c as usize];
+                let bd = (p[0] - f.c[0]).abs() - f.h[0];
+                let bd = bd.max((p[1] - f.c[1]).abs() - f.h[1]);
+                let bd = bd.max((p[2] - f.c[2]).abs() - f.h[2]);
+                if bd < best {
+                    best = best.min(self.term3(f, p).0);
+                }
+            }
+        }
+        best
+    }
+
+    /// The value alone (3D: [`PoreField::value3`]).
     #[inline]
     fn value_only(&self, p: [f64; 3]) -> f64 {
         if p[0].is_nan() || p[1].is_nan() || p[2].is_nan() {
@@ -261,11 +340,14 @@ impl PoreField {
         let [lo, hi] = &self.tree.root_box_ref();
         let q: [f64; 3] = std::array::from_fn(|a| p[a].clamp(lo[a], hi[a]));
         let leaf = self.index.leaf(&self.tree, q);
+        if self.dim == 3 {
+            return self.value3(p, leaf);
+        }
         let mut best = self.cap;
         let own = self.own[leaf];
         if own != NONE {
             let bd = self.box_distance(own as usize, p).0;
-            best = best.min(self.term_value(own as usize, p, bd));
+            best = best.min(self.term2_value(own as usize, p, bd));
             if best <= -bd {
                 return best;
             }
@@ -288,7 +370,7 @@ impl PoreField {
             for &c in &self.cand[s..e] {
                 let bd = self.box_distance(c as usize, p).0;
                 if bd < best {
-                    best = best.min(self.term_value(c as usize, p, bd));
+                    best = best.min(self.term2_value(c as usize, p, bd));
                 }
             }
         }
@@ -298,6 +380,7 @@ impl PoreField {
     /// `-c_C(p)` (the Chebyshev distance outside the box, negative inside)
     /// and the axis that decides it.
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
     fn box_distance(&self, c: usize, p: [f64; 3]) -> (f64, usize) {
         let b = &self.boxes[c];
         let mut d = f64::NEG_INFINITY;
@@ -397,6 +480,7 @@ impl PoreField {
             + (self.own.len() + self.cand_start.len() + self.cand.len() + self.index.start.len())
                 * 4
             + self.leaf_box.len() * std::mem::size_of::<CellBox>()
+            + self.fast3.len() * std::mem::size_of::<Fast3>()
             + self.tree.nodes.len() * std::mem::size_of::<Node>()
             + self.tree.leaves.len() * std::mem::size_of::<([f64; 3], [f64; 3], u32)>()
             + self.tree.cells.len() * std::mem::size_of::<crate::tree::Cell>()
@@ -472,9 +556,195 @@ impl Field for PoreField {
     }
 
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
-        for i in 0..out.len() {
-            out[i] = self.value_only([x[i] as f64, y[i] as f64, z[i] as f64]) as f32;
+        if self.dim != 3 {
+            for i in 0..out.len() {
+                out[i] = self.value_only([x[i] as f64, y[i] as f64, z[i] as f64]) as f32;
+            }
+            return;
         }
+        let n = out.len();
+        let mut start = 0;
+        while start < n {
+            let m = CHUNK.min(n - start);
+            let r = start..start + m;
+            self.batch3(&x[r.clone()], &y[r.clone()], &z[r.clone()], &mut out[r]);
+            start += m;
+        }
+    }
+}
+
+/// Points per pass of the 3D batch.
+const CHUNK: usize = 64;
+
+impl PoreField {
+    /// Up to [`CHUNK`] points: leaves (the last one kept, as neighbouring
+    /// points mostly share it), then the own cells' terms over runs of
+    /// points in the same cell (straight-line loops the compiler
+    /// vectorises, the table reads apart), then the neighbours for the
+    /// points nearer to their cell's faces than to its pore.
+    fn batch3(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        let m = out.len();
+        let mut px = [0.0f64; CHUNK];
+        let mut py = [0.0f64; CHUNK];
+        let mut pz = [0.0f64; CHUNK];
+        let mut leafs = [u32::MAX; CHUNK];
+        let mut own = [NONE; CHUNK];
+        let [lo, hi] = self.tree.root_box_ref();
+        let mut leaf = usize::MAX;
+        let (mut llo, mut lhi) = ([0.0; 3], [0.0; 3]);
+        for i in 0..m {
+            let p = [x[i] as f64, y[i] as f64, z[i] as f64];
+            (px[i], py[i], pz[i]) = (p[0], p[1], p[2]);
+            if p[0].is_nan() || p[1].is_nan() || p[2].is_nan() {
+                continue;
+            }
+            let q: [f64; 3] = std::array::from_fn(|a| p[a].clamp(lo[a], hi[a]));
+            let hit = leaf != usize::MAX && (0..3).all(|a| q[a] >= llo[a] && q[a] < lhi[a]);
+            if !hit {
+                leaf = self.index.leaf(&self.tree, q);
+                (llo, lhi, _) = self.tree.leaves[leaf];
+            }
+            leafs[i] = leaf as u32;
+            own[i] = self.own[leaf];
+        }
+        let mut best = [self.cap; CHUNK];
+        let mut inner = [f64::NEG_INFINITY; CHUNK];
+        let mut s = 0;
+        while s < m {
+            let o = own[s];
+            let mut e = s + 1;
+            while e < m && own[e] == o {
+                e += 1;
+            }
+            if o != NONE {
+                self.own_run(
+                    &self.fast3[o as usize],
+                    &px[s..e],
+                    &py[s..e],
+                    &pz[s..e],
+                    &mut best[s..e],
+                    &mut inner[s..e],
+                );
+            }
+            s = e;
+        }
+        for i in 0..m {
+            out[i] = if leafs[i] == u32::MAX {
+                f32::NAN
+            } else if best[i] <= inner[i] {
+                best[i] as f32
+            } else {
+                self.rest3([px[i], py[i], pz[i]], leafs[i] as usize, best[i]) as f32
+            };
+        }
+    }
+
+    /// The own cell's term for a run of points of that cell: `best` gets
+    /// `min(cap, term)`, `inner` the distance to the cell's faces.
+    #[inline(never)]
+    fn own_run(
+        &self,
+        c: &Fast3,
+        x: &[f64],
+        y: &[f64],
+        z: &[f64],
+        best: &mut [f64],
+        inner: &mut [f64],
+    ) {
+        let m = x.len();
+        let (y, z, best, inner) = (&y[..m], &z[..m], &mut best[..m], &mut inner[..m]);
+        let mut bd = [0.0f64; CHUNK];
+        let mut len = [0.0f64; CHUNK];
+        let mut fu = [0.0f64; CHUNK];
+        let mut fv = [0.0f64; CHUNK];
+        let mut idx = [0u32; CHUNK];
+        let n = self.texels;
+        let half = 0.5 * n as f64;
+        let w = (n + 1) as i32;
+        let top = n as i32 - 1;
+        for i in 0..m {
+            let d = [x[i] - c.c[0], y[i] - c.c[1], z[i] - c.c[2]];
+            bd[i] = (d[0].abs() - c.h[0])
+                .max(d[1].abs() - c.h[1])
+                .max(d[2].abs() - c.h[2]);
+            let q = [d[0] * c.inv[0], d[1] * c.inv[1], d[2] * c.inv[2]];
+            let a = [q[0].abs(), q[1].abs(), q[2].abs()];
+            len[i] = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+            let m0 = a[0] >= a[1] && a[0] >= a[2];
+            let m1 = !m0 && a[1] >= a[2];
+            let am = if m0 {
+                a[0]
+            } else if m1 {
+                a[1]
+            } else {
+                a[2]
+            };
+            let ym = if m0 {
+                q[0]
+            } else if m1 {
+                q[1]
+            } else {
+                q[2]
+            };
+            let yb = if m0 { q[1] } else { q[0] };
+            let yc = if m0 || m1 { q[2] } else { q[1] };
+            let axis = if m0 {
+                0
+            } else if m1 {
+                1
+            } else {
+                2
+            };
+            let inv = 1.0 / am.max(f64::MIN_POSITIVE);
+            let tu = (yb * inv + 1.0) * half;
+            let tv = (yc * inv + 1.0) * half;
+            let ii = (tu as i32).clamp(0, top);
+            let jj = (tv as i32).clamp(0, top);
+            fu[i] = tu - ii as f64;
+            fv[i] = tv - jj as f64;
+            let face = 2 * axis + (ym < 0.0) as i32;
+            idx[i] = ((face * w + jj) * w + ii) as u32;
+        }
+        let t = &self.tables[c.off as usize..];
+        let wu = w as usize;
+        for i in 0..m {
+            let k = idx[i] as usize;
+            let (r00, r10) = (t[k] as f64, t[k + 1] as f64);
+            let (r01, r11) = (t[k + wu] as f64, t[k + wu + 1] as f64);
+            let lo = r00 + (r10 - r00) * fu[i];
+            let hi = r01 + (r11 - r01) * fu[i];
+            let nq = c.k * (len[i] / (lo + (hi - lo) * fv[i])) - c.m;
+            best[i] = self.cap.min(bd[i].max(nq));
+            inner[i] = -bd[i];
+        }
+    }
+
+    /// The neighbours' terms for a point of `leaf`, from `best`.
+    fn rest3(&self, p: [f64; 3], leaf: usize, mut best: f64) -> f64 {
+        let lb = &self.leaf_box[leaf];
+        for side in 0..6 {
+            let a = side / 2;
+            let d = if side % 2 == 0 {
+                p[a] - (lb.c[a] - lb.h[a])
+            } else {
+                lb.c[a] + lb.h[a] - p[a]
+            };
+            if d >= best {
+                continue;
+            }
+            let k = leaf * 6 + side;
+            let (s, e) = (self.cand_start[k] as usize, self.cand_start[k + 1] as usize);
+            for &c in &self.cand[s..e] {
+                let f = &self.fast3[c as usize];
+                let bd = (p[0] - f.c[0]).abs() - f.h[0];
+                let bd = bd.max((p[1] - f.c[1]).abs() - f.h[1]);
+                let bd = bd.max((p[2] - f.c[2]).abs() - f.h[2]);
+                if bd < best {
+                    best = best.min(self.term3(f, p).0);
+                }
+            }
+        }
+        best
     }
 }
 

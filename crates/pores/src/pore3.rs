@@ -237,9 +237,10 @@ pub(crate) fn range(kappa: f64) -> (f64, f64) {
 
 /// Solves the pore of one cell for `target` in [`range`]: shape `1 + sigma u`,
 /// reduced (halved, then 0) until the pore meets the rules: every `t` in
-/// [0, 1], the pore containing the six face centres when the target is
-/// above the face-touching porosity (so it opens into every neighbour), and
-/// off the cell's edges (so the solid stays connected).
+/// [0, 1]; above the face-touching porosity the pore contains the six face
+/// centres (so it opens into every neighbour), below it the pore stays
+/// inside the cell (closed); and it stays off the cell's edges (so the
+/// solid stays connected).
 pub(crate) fn solve(target: f64, u: &[[f64; 3]; 8], sigma: f64, kappa: f64) -> Option<Solved> {
     let s = shared();
     let open = target > s.p_face + 1e-9;
@@ -278,7 +279,10 @@ pub(crate) fn solve(target: f64, u: &[[f64; 3]; 8], sigma: f64, kappa: f64) -> O
                 gauge(&table, y).0 < lambda
             });
         let edges_ok = lambda * edge_reach(s, &table) < 1.0;
-        if t_ok && faces_ok && (edges_ok || !(target < s.p_edge)) {
+        // Below the face-touching porosity the pore stays inside its cell
+        // (closed pores, as in the paper's range).
+        let closed_ok = open || s.quad.iter().zip(&rq).all(|(q, &r)| lambda * r < q.rho);
+        if t_ok && faces_ok && closed_ok && (edges_ok || target >= s.p_edge) {
             let porosity = fraction(&s.quad, &rq, lambda);
             return Some(Solved {
                 table,

@@ -317,7 +317,7 @@ impl Walker {
         let mut map = CubeMap::constant(self.n, 0.0);
         for (k, v) in map.values_mut().iter_mut().enumerate() {
             let (_, r) = self.walk(pos, self.dirs[k], self.start[k], 256)?;
-            if !(r > 0.0) {
+            if r.is_nan() || r <= 0.0 {
                 return None;
             }
             *v = r as f32;

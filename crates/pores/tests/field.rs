@@ -188,6 +188,20 @@ fn bad_inputs_are_clear_errors() {
         ),
         Err(PoreError::TooManyCells { .. })
     ));
+    assert!(matches!(
+        Pores::build(
+            &part,
+            bounds,
+            Spec::Constant(0.1),
+            Spec::Constant(0.7),
+            0,
+            &Options {
+                memory_limit: 1 << 20,
+                ..Options::default()
+            }
+        ),
+        Err(PoreError::Memory { .. })
+    ));
     let far = prims::sphere(&Expr::xyz(), &prims::v3([10.0; 3]), 1.0);
     assert!(matches!(
         Pores::build(
