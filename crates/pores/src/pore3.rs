@@ -1,6 +1,44 @@
 //! 3D pores (Kou and Tan, Sec. 4.2): the derived polyhedron of a cell
-//! (Eq. 9), the Doo-Sabin limit surface it controls, tabulated as a radial
-//! function, and the pore size solved for a porosity of the cell.
+//! (Eq. 9), the smooth closed surface it controls, and the pore size solved
+//! for a porosity of the cell.
+//!
+//! **Construction.** The pore is the Doo-Sabin limit surface of the derived
+//! polyhedron. Doo-Sabin is the quadratic subdivision scheme (biquadratic
+//! B-splines on regular regions), so it is the surface analogue of the 2D
+//! pores' closed quadratic B-spline (Chaikin's curve), and the paper cites
+//! it for this step; Catmull-Clark would be the cubic analogue. The surface
+//! lies in the convex hull of its control polyhedron, touches the centre of
+//! every face of a cubic one, and is linear in the control points.
+//!
+//! **Evaluation.** The topology is always the cube's, so the subdivided
+//! mesh after [`LEVEL`] steps is computed once, symbolically: each face
+//! centroid (a point exactly on the limit surface) as a fixed combination of
+//! the eight control points. A pore's surface is then a matrix product, and
+//! its radial function around the cell centre is tabulated on a cube map of
+//! [`TEXELS`]^2 texels per face (each direction walks the mesh from the
+//! regular pore's triangle to its own). The pore's FRep is
+//! `q = m (1 - g / lambda)`, `g(y) = |y| / R(y / |y|)` the gauge of the
+//! tabulated body in cell coordinates, `R` bilinear in the cube-map
+//! coordinates: continuous, Lipschitz with a constant bounded per texel,
+//! and about a distance near the surface. The zero set is the limit
+//! surface to within 0.4 % (regular pore) to 0.7 % (irregularity 0.3) of
+//! the radius at worst and 0.15 % on average, slightly inside (chords of
+//! a convex surface): measured against the exact limit points after 7
+//! steps by `tests/geometry.rs`.
+//!
+//! **Volume.** The porosity of a cell is `(1/3) int min(lambda R, rho)^3`
+//! over the sphere of directions (`rho` the distance to the cell's
+//! surface), by 2 x 2 Gauss points per texel of the same interpolated `R`,
+//! so it is the volume of the FRep's pore itself, clipped to its cell, to
+//! about 2e-4.
+//!
+//! **Range.** The regular pore (a cubic derived polyhedron) touches the
+//! cell's faces at porosity 0.6274 (the exact limit surface: 0.6291; the
+//! paper's sphere: pi/6 = 0.5236) and its edges at 0.9898, at
+//! `lambda = 1.3329` (the surface passes through `(3/4, 3/4, 0)` of its
+//! control cube, as the 2D curve does; the paper's sphere: 0.965). Between
+//! the two every pore opens into its six neighbours and the solid stays one
+//! piece; below the first the pores are closed.
 //!
 //! Work is done in cell coordinates `y = (x - centre) / half`, where the
 //! cell is `[-1, 1]^3`; Doo-Sabin subdivision commutes with affine maps,
@@ -11,10 +49,11 @@
 //! on its three edges, and the new vertex `A' = (A + A1 + A2 + A3) / 4`
 //! (Eq. 9) lies at `kappa (1 - t_k / 2)` on axis `k`. Pores are drawn as a
 //! random shape `b` (vertex `s` at `s * b_s`, `b = 1 + sigma * u` with `u`
-//! uniform in [-1, 1]) scaled by `lambda` about the centre, so
-//! `t = 2 (1 - lambda b / kappa)`; the Doo-Sabin surface of the scaled
-//! polyhedron is the scaled surface, so one table of the shape serves every
-//! `lambda`, and `lambda` is solved from the clipped volume.
+//! uniform in [-1, 1], balanced per face, [`face_balanced`]) scaled by
+//! `lambda` about the centre, so `t = 2 (1 - lambda b / kappa)`; the
+//! Doo-Sabin surface of the scaled polyhedron is the scaled surface, so one
+//! table of the shape serves every `lambda`, and `lambda` is solved from
+//! the clipped volume.
 
 use crate::cubemap::{gauge, quadrature, CubeMap, QuadPoint};
 use crate::doo_sabin::{corner_sign, limit_mesh, LimitMesh};

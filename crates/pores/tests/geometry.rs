@@ -354,3 +354,28 @@ fn one_cell_porosity_matches_sampling_of_its_field() {
         assert!((measured - target).abs() < 0.004, "{target}: {measured}");
     }
 }
+
+#[test]
+fn walking_and_rasterising_tabulate_the_same_surface() {
+    use microfrep_pores::raster::{tabulate, Walker};
+    let m = limit_mesh(4);
+    let tris: Vec<[u32; 3]> = m
+        .quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    let reference = m.positions(&control(&[[1.0; 3]; 8]));
+    let walker = Walker::new(&reference, &tris, 16);
+    let mut r = Lcg(8);
+    for _ in 0..10 {
+        let b: [[f64; 3]; 8] =
+            std::array::from_fn(|_| std::array::from_fn(|_| 1.0 + 0.3 * (2.0 * r.next() - 1.0)));
+        let pos = m.positions(&control(&b));
+        let walked = walker.tabulate(&pos).unwrap();
+        let (raster, report) = tabulate(&pos, &tris, 16).unwrap();
+        assert_eq!(report.conflicts, 0);
+        for (a, b) in walked.values().iter().zip(raster.values()) {
+            assert!((a - b).abs() <= 1e-6 * b, "{a} {b}");
+        }
+    }
+}
