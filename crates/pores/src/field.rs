@@ -13,10 +13,16 @@
 //! subdivided box points into the tree of splits, which gives the leaf of
 //! the point in a step or two. A cell farther than `cap` (Chebyshev) from a
 //! point cannot bring `f` below `cap`, so each leaf keeps the list of pore
-//! cells within `cap` of it; and a neighbour `D` of the point's own cell
-//! `C` gives at least the point's distance `c_C(x)` to the faces of `C`, so
-//! once the own pore gives `f <= c_C(x)` (inside the pore, or nearer to it
-//! than to the cell's faces) the neighbours are not visited at all.
+//! cells within `cap` of it, sorted by the side of the leaf they lie
+//! beyond; a neighbour beyond a side gives at least the point's distance to
+//! that side, so once the own pore gives `f <= c_C(x)` (inside the pore, or
+//! nearer to it than to the cell's faces) no neighbour is visited, and
+//! otherwise only those beyond the near sides. The f32 batch keeps the last
+//! leaf and computes the own cells' terms over runs of points in one cell
+//! in straight-line loops the compiler vectorises.
+//!
+//! The 3D batch costs about 4 times a gyroid's per point (the cube-map
+//! reads and the leaf look-up do not vectorise; `bench/run pores`).
 //!
 //! Bounds: every term is Lipschitz (the box functions with constant 1, the
 //! 2D signed distances with 1, the 3D pores with the constant of their

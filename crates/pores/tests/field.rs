@@ -95,6 +95,41 @@ fn same_seed_same_values_other_seed_other_pores() {
 }
 
 #[test]
+fn thread_count_does_not_change_the_structure() {
+    let build = || {
+        Pores::build(
+            &ball(),
+            [[-1.0; 3], [1.0; 3]],
+            graded_size(),
+            Spec::Constant(0.7),
+            9,
+            &Options::default(),
+        )
+        .unwrap()
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(build);
+    let many = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .unwrap()
+        .install(build);
+    assert_eq!(one.field.name(), many.field.name());
+    for i in 0..2000 {
+        let t = i as f64;
+        let p = [
+            (t * 0.618).fract() * 2.4 - 1.2,
+            (t * 0.414).fract() * 2.4 - 1.2,
+            (t * 0.732).fract() * 2.4 - 1.2,
+        ];
+        assert_eq!(one.field.eval(p).to_bits(), many.field.eval(p).to_bits());
+    }
+}
+
+#[test]
 fn bad_inputs_are_clear_errors() {
     let part = ball();
     let bounds = [[-1.0; 3], [1.0; 3]];
