@@ -7,6 +7,7 @@ mod eval;
 mod hyperfun;
 mod mesh;
 mod parts;
+mod pores;
 mod slice;
 mod structures;
 mod threemf;
@@ -43,6 +44,10 @@ const SUITES: &[(&str, &str)] = &[
         "mesh signed distance queries/s vs libigl, 1M-triangle BVH build, peak memory",
     ),
     (
+        "pores",
+        "Kou-Tan bone (>1000 pores): build, mesh at 256^3, slicing vs a gyroid of the same cell",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -63,6 +68,7 @@ fn main() {
         "eval" => eval::run(),
         "mesh" => mesh::run(),
         "parts" => parts::run(),
+        "pores" => pores::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),

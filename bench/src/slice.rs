@@ -97,7 +97,7 @@ fn stack(ours: &rayon::ThreadPool) -> Result<f64, String> {
     let dir = std::env::temp_dir().join(format!("microfrep-bench-slice-{}", std::process::id()));
     let (s, _) = best(|| {
         let _ = std::fs::remove_dir_all(&dir);
-        ours.install(|| write_stack(&tape, &grid, Format::Png { aa: false }, &dir, &|| {}))
+        ours.install(|| write_stack(&tape, &grid, &Format::Png { aa: false }, &dir, &|| {}))
             .map_err(|e| e.to_string())
     })?;
     let bytes: u64 = std::fs::read_dir(&dir)

@@ -12,6 +12,7 @@
 //! | [`core`] | `microfrep-core` | expression graph, tape, evaluators, [`Shape`] |
 //! | [`hyperfun`] | `microfrep-hyperfun` | the HyperFun language |
 //! | [`structures`] | `microfrep-structures` | lattices, TPMS, struts, porous media, replication |
+//! | [`pores`] | `microfrep-pores` | irregular pores by subdivision (Kou and Tan) |
 //! | [`graded`] | `microfrep-graded` | graded materials, Bezier data, dithering, material stacks |
 //! | [`meshfield`] | `microfrep-meshfield` | triangle meshes as signed fields |
 //! | [`scan`] | `microfrep-scan` | volume images as signed fields |
@@ -45,6 +46,7 @@ pub use microfrep_hyperfun as hyperfun;
 pub use microfrep_io as io;
 pub use microfrep_mesh as mesh;
 pub use microfrep_meshfield as meshfield;
+pub use microfrep_pores as pores;
 pub use microfrep_render as render;
 pub use microfrep_scan as scan;
 pub use microfrep_structures as structures;

@@ -6,7 +6,7 @@ use dicom_core::value::PrimitiveValue;
 use dicom_core::{DataElement, VR};
 use dicom_dictionary_std::tags;
 use dicom_object::{FileMetaTableBuilder, InMemDicomObject};
-use microfrep_core::{Expr, Field, Tape};
+use microfrep_core::{Expr, Field, Shape};
 use microfrep_scan::{ReadOptions, SampleType, Samples, ScanError, ScanField, ScanOptions, Volume};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -769,11 +769,11 @@ fn dicom_errors_for_gaps_mixed_series_and_broken_files() {
 }
 
 /// The sphere of radius R around C as an FRep model.
-fn ball_model() -> Tape {
+fn ball_model() -> Shape {
     let [x, y, z] = Expr::xyz();
     let e = Expr::constant(R)
         - ((x - C[0]).square() + (y - C[1]).square() + (z - C[2]).square()).sqrt();
-    Tape::new(&e)
+    Shape::new(e)
 }
 
 #[test]

@@ -13,6 +13,7 @@ mod args;
 mod cells;
 mod graded;
 mod pasko;
+mod pores;
 mod struts;
 mod tables;
 mod tpms;
@@ -29,6 +30,7 @@ pub fn register(r: &mut Registry) {
     tpms::register(r);
     struts::register(r);
     graded::register(r);
+    pores::register(r);
 }
 
 /// Installs the library into every standard HyperFun registry of this

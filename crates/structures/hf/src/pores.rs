@@ -1,0 +1,67 @@
+//! Kou and Tan's irregular porous structures: `mfPores` (3D, octree cells,
+//! Doo-Sabin pores) and `mfPores2` (2D in the xy plane, quadtree cells,
+//! closed quadratic B-spline pores, extruded along z). Both return the part
+//! `F >= 0` minus its pores; the structure is built when the model is
+//! loaded, from the part's proven bounds.
+
+use crate::args::three;
+use microfrep_core::Expr;
+use microfrep_hyperfun::library::{Arg, Kind::*, Output, Registry};
+use microfrep_pores::{part_bounds, Dim, Options, Pores, Spec};
+
+/// The seed argument: a constant integer in [0, 2^53).
+fn seed(a: &Arg) -> Result<u64, Output> {
+    match a.real().as_const() {
+        Some(v) if v.fract() == 0.0 && (0.0..9_007_199_254_740_992.0).contains(&v) => Ok(v as u64),
+        Some(v) => Err(Output::error(format!(
+            "seed must be a whole number from 0 to 2^53, not {v}"
+        ))),
+        None => Err(Output::error(
+            "seed must be a constant (the same seed gives the same structure)",
+        )),
+    }
+}
+
+fn build(a: &[Arg], dim: Dim) -> Output {
+    crate::args::out(|| {
+        let x = three(&a[0], "x")?;
+        let part = a[1].real();
+        if part.as_const().is_some() {
+            return Err(Output::error(
+                "the part F must be an expression of the coordinates (the model must lower \
+                 to a graph; `microfrep check` says which path it takes)",
+            ));
+        }
+        let seed = seed(&a[4])?;
+        let bounds = part_bounds(&part).map_err(|e| Output::error(e.to_string()))?;
+        let opts = match dim {
+            Dim::Two => Options::two_d(),
+            Dim::Three => Options::default(),
+        };
+        let built = Pores::build(
+            &part,
+            bounds,
+            Spec::from(a[2].real()),
+            Spec::from(a[3].real()),
+            seed,
+            &opts,
+        )
+        .map_err(|e| Output::error(e.to_string()))?;
+        Ok(Output::value(part.min(Expr::field_at(built.field, x))))
+    })
+}
+
+/// `mfPores(x, F, size, porosity, seed)`.
+fn pores3(a: &[Arg]) -> Output {
+    build(a, Dim::Three)
+}
+
+/// `mfPores2(x, F, size, porosity, seed)`.
+fn pores2(a: &[Arg]) -> Output {
+    build(a, Dim::Two)
+}
+
+pub(crate) fn register(r: &mut Registry) {
+    r.register("mfpores", &[A, R, R, R, R], pores3);
+    r.register("mfpores2", &[A, R, R, R, R], pores2);
+}
