@@ -8,6 +8,7 @@ mod hyperfun;
 mod mesh;
 mod slice;
 mod structures;
+mod studio;
 mod threemf;
 mod to_fidget;
 
@@ -38,6 +39,10 @@ const SUITES: &[(&str, &str)] = &[
         "beam-lattice, slice-stack and volumetric 3MF vs STL: file sizes, write times",
     ),
     (
+        "studio",
+        "microfrep serve: edit to first preview mesh and to refined mesh, three examples",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -61,6 +66,7 @@ fn main() {
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),
         "3mf" => threemf::run(),
+        "studio" => studio::run(),
         "" => Err(usage()),
         other => Err(format!("unknown suite '{other}'\n{}", usage())),
     };
