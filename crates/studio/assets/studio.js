@@ -263,7 +263,7 @@
     const changed = !app.bounds || JSON.stringify(app.bounds) !== JSON.stringify(b);
     const first = !app.bounds;
     app.bounds = b;
-    $("bounds-src").textContent = { page: "(set here)", comment: "(from the model's comment)", proven: "(proven by intervals)" }[m.bounds_source] || "";
+    $("bounds-src").textContent = { page: "(set here)", comment: "(comment)", proven: "(proven)" }[m.bounds_source] || "";
     if (changed) {
       const box = $("bounds-inputs");
       box.textContent = "";
@@ -358,15 +358,13 @@
     img.src = `/api/render.png?session=${app.session}&gen=${gen}&view=${view}&cutaway=${$("cutaway").checked ? 1 : 0}&w=${w}&h=${h}`;
   }
 
-  function row(name, value, err, extra) {
-    const tr = document.createElement("tr");
-    const a = document.createElement("td");
+  function row(name, value, err) {
+    const a = document.createElement("span");
     a.textContent = name;
-    const b = document.createElement("td");
+    const b = document.createElement("span");
     b.className = "v";
-    b.textContent = value + (err !== undefined ? " ± " + (err > 0 ? err.toPrecision(2) : "0") : "") + (extra || "");
-    tr.append(a, b);
-    return tr;
+    b.textContent = value + (err !== undefined ? " ± " + (err > 0 ? err.toPrecision(2) : "0") : "");
+    return [a, b];
   }
 
   function showAnalysis(st) {
@@ -387,18 +385,19 @@
     head.className = "res";
     head.textContent = `${kind}, ${a.resolution} voxels on the longest side${kind === "preview" && !st.done ? " (refining…)" : ""}`;
     body.appendChild(head);
-    const t = document.createElement("table");
-    t.append(
+    const t = document.createElement("div");
+    t.className = "figs";
+    const rows = [
       row("volume fraction", fmt(r.volume_fraction.value), r.volume_fraction.error),
       row("porosity", fmt(r.porosity.value), r.porosity.error),
       row("volume", fmt(r.volume.value), r.volume.error),
       row("surface area", fmt(r.area.value), r.area.error),
       row("specific surface", fmt(r.specific_surface.value), r.specific_surface.error),
-    );
+    ];
     const c = r.connectivity;
     if (c) {
       const yn = (b) => (b ? "yes" : "no");
-      t.append(
+      rows.push(
         row("solid components", String(c.solid_components)),
         row("pore components", String(c.pore_components)),
         row("open pores", fmt(100 * c.open_pore_fraction, 2) + " %"),
@@ -407,6 +406,7 @@
         row("Euler (surface)", String(c.euler_surface)),
       );
     }
+    for (const [a, b] of rows) t.append(a, b);
     body.appendChild(t);
     body.dataset.volumeFraction = r.volume_fraction.value;
     body.dataset.kind = kind;

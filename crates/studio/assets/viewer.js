@@ -250,7 +250,9 @@ void main() {
       const b = this.bounds;
       this.target = [0, 1, 2].map((a) => 0.5 * (b[0][a] + b[1][a]));
       const r = 0.5 * Math.hypot(b[1][0] - b[0][0], b[1][1] - b[0][1], b[1][2] - b[0][2]);
-      this.dist = r / Math.sin(0.5 * this.fov()) * 1.05;
+      // The solid rarely reaches the box's corners: frame a little tighter
+      // than the box's bounding sphere.
+      this.dist = r / Math.sin(0.5 * this.fov()) * 0.92;
       const v = view || "iso";
       const presets = { iso: [-0.785, 0.6], front: [-Math.PI / 2, 0], top: [-Math.PI / 2, 1.5499], side: [0, 0] };
       [this.yaw, this.pitch] = presets[v] || presets.iso;

@@ -111,7 +111,8 @@ fn diag_of(d: &Diagnostic) -> Diag {
 
 /// Parses and lowers object `object` (default `my_model`, else the first)
 /// of `src` with `a[1..] = params`; the other objects are lowered too, as
-/// `microfrep check` does, so their errors are reported.
+/// `microfrep check` does, so their errors are reported (the model is
+/// still returned when only those fail).
 pub fn load(src: &str, file: &str, object: Option<&str>, params: &[f64]) -> LoadResult {
     install();
     let options = microfrep_hyperfun::Options::default();
@@ -169,8 +170,9 @@ pub fn load(src: &str, file: &str, object: Option<&str>, params: &[f64]) -> Load
             message: m,
         });
     }
-    let failed = diags.iter().any(|d| d.error);
-    let model = model.filter(|_| !failed).map(|m| {
+    // Errors in other objects are reported, but do not stop the preview of
+    // the evaluated one.
+    let model = model.map(|m| {
         let shape = m.shape();
         Loaded {
             attributes: shape.attributes().iter().map(|a| a.name.clone()).collect(),
@@ -572,3 +574,65 @@ pub fn memory_available() -> Option<f64> {
 }
 
 const MIB: f64 = 1024.0 * 1024.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use microfrep_core::{prims, Expr};
+
+    #[test]
+    fn attribute_channels_are_evaluated_at_the_vertices() {
+        let p = Expr::xyz();
+        let ball = prims::sphere(&p, &prims::v3([0.0; 3]), 0.7);
+        // Two channels: height, and squared distance from the z axis.
+        let shape = Shape::new(ball)
+            .with_attribute("height", p[2].clone())
+            .with_attribute("r2", p[0].square() + p[1].square());
+        let m = mesh(&shape, [[-1.0; 3], [1.0; 3]], 24, 1e9, &|| {}).unwrap();
+        assert_eq!(m.attributes.len(), 2);
+        assert!(!m.vertices.is_empty());
+        for (i, v) in m.vertices.iter().enumerate() {
+            assert!((m.attributes[0][i] - v[2]).abs() < 1e-6);
+            assert!((m.attributes[1][i] - (v[0] * v[0] + v[1] * v[1])).abs() < 1e-5);
+        }
+        let (closed, euler) = mesh_check(&m);
+        assert!(closed && euler == 2);
+        let stl = stl_bytes(&m).unwrap();
+        assert_eq!(stl.len(), 84 + 50 * m.triangles.len());
+    }
+
+    #[test]
+    fn diagnostics_match_check() {
+        let src = "my_model(x[3], a[1]) {\n  my_model = 1 - ;\n}\nother(x[3], a[1]) {\n  other = zz(x);\n}\n";
+        let r = load(src, "t.hf", None, &[]);
+        assert!(r.model.is_none());
+        assert_eq!(r.diags[0].line, 2);
+        assert!(r.diags[0].error);
+        assert!(r.rendered.starts_with("t.hf:2:"), "{}", r.rendered);
+        // The evaluated object is fine, another object is not: the error is
+        // reported and the model still shown.
+        let src = "my_model(x[3], a[1]) {\n  my_model = 1 - x[1];\n}\nother(x[3], a[1]) {\n  other = mfTpms(x, 9, 0, 1, 0);\n}\n";
+        let r = load(src, "t.hf", None, &[]);
+        assert!(
+            r.diags.iter().any(|d| d.error && d.line == 5),
+            "{:?}",
+            r.diags
+        );
+        assert_eq!(r.model.unwrap().object, "my_model");
+        let r = load(src, "t.hf", Some("other"), &[]);
+        assert!(r.model.is_none());
+        let ok = load(
+            "my_model(x[3], a[2]) { my_model = a[1] - x[1]; }",
+            "t.hf",
+            None,
+            &[0.5],
+        );
+        let m = ok.model.unwrap();
+        assert_eq!(
+            m.params,
+            vec![("a1".to_string(), 0.5), ("a2".to_string(), 0.0)]
+        );
+        assert!(m.attributes.is_empty());
+        assert_eq!(m.shape.point().eval([0.25, 0.0, 0.0]), 0.25);
+    }
+}

@@ -240,8 +240,9 @@ impl Session {
     /// Queues an edit as the newest generation and returns its number;
     /// the work on older generations stops at its next check.
     pub fn edit(self: &Arc<Self>, edit: Edit) -> Result<u64, StudioError> {
-        let gen = self.gen.fetch_add(1, Ordering::SeqCst) + 1;
         let mut st = lock(&self.state);
+        // Numbered under the lock, so the pending edit is always the newest.
+        let gen = self.gen.fetch_add(1, Ordering::SeqCst) + 1;
         st.last_seen = Instant::now();
         st.pending = Some((gen, edit));
         if !st.worker {

@@ -472,3 +472,42 @@ fn memory_limit_lowers_the_resolution() {
     studio.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn tabs_have_their_own_sessions() {
+    let dir = root("tabs");
+    let (studio, c) = start(&dir);
+    let handles: Vec<_> = [0.3, 0.5, 0.7]
+        .into_iter()
+        .map(|r| {
+            let c = c.clone();
+            std::thread::spawn(move || {
+                let s = session(&c);
+                // Each tab edits a few times; only its newest edit counts.
+                let mut gen = 0;
+                for k in 0..3 {
+                    let st = edit(
+                        &c,
+                        &s,
+                        SPHERE,
+                        json!({ "bounds": unit_box(), "params": [r + 0.05 * (2 - k) as f64], "wait_ms": 0 }),
+                    );
+                    gen = st["latest_gen"].as_u64().unwrap();
+                }
+                let st = wait(&c, &s, gen);
+                let vf = st["analysis"]["refined"]["report"]["volume_fraction"]["value"]
+                    .as_f64()
+                    .unwrap();
+                (r, vf, st["model"]["params"][0]["value"].as_f64().unwrap())
+            })
+        })
+        .collect();
+    for h in handles {
+        let (r, vf, p) = h.join().unwrap();
+        assert_eq!(p, r);
+        let exact = 4.0 / 3.0 * PI * r.powi(3) / 8.0;
+        assert!((vf - exact).abs() < 2e-3, "radius {r}: {vf} vs {exact}");
+    }
+    studio.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
