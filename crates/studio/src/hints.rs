@@ -111,7 +111,8 @@ pub struct ParamHint {
     pub range: Option<[f64; 2]>,
 }
 
-/// The `a[K] = V [in [LO, HI]]` hints of the comments, first one per index.
+/// The `a[K] = V [in [LO, HI]]` hints of the comments (K up to 4096),
+/// first one per index.
 pub fn param_hints(src: &str) -> Vec<ParamHint> {
     let text = comment_text(src);
     let b = text.as_bytes();
@@ -128,7 +129,7 @@ pub fn param_hints(src: &str) -> Vec<ParamHint> {
         let mut c = Cur { s: b, i: i + 2 };
         i += 2;
         let Some(k) = c.number() else { continue };
-        if k.fract() != 0.0 || !(1.0..=1e6).contains(&k) || c.eat(b']').is_none() {
+        if k.fract() != 0.0 || !(1.0..=4096.0).contains(&k) || c.eat(b']').is_none() {
             continue;
         }
         if c.eat(b'=').is_none() {

@@ -6,7 +6,7 @@
 //! A session has one worker at a time. An edit bumps the session's
 //! generation counter and leaves the edit for the worker; every long call
 //! of the worker checks the counter between units of work (a brick, a
-//! layer) and unwinds when it is stale ([`Guard::check`]), so the worker
+//! layer) and unwinds when it is stale (`Guard::check`), so the worker
 //! turns to the newest edit within one unit of work. Lowering cannot be
 //! interrupted, but HyperFun bounds its loops. Each stage also has a time
 //! limit, and a panic in a stage is caught and shown as the model's error.
@@ -783,6 +783,7 @@ impl Session {
                 .params
                 .iter()
                 .zip(&c.params)
+                .take(MAX_PARAMS)
                 .enumerate()
                 .map(|(k, ((name, _), p))| {
                     json!({
@@ -799,6 +800,7 @@ impl Session {
                 "objects": m.objects,
                 "lowered": m.lowered,
                 "params": params,
+                "params_total": m.params.len(),
                 "attributes": m.attributes,
                 "bounds": c.bounds,
                 "bounds_source": c.bounds_source,
@@ -883,6 +885,9 @@ pub struct Sessions {
     next: AtomicU64,
     cfg: Arc<Config>,
 }
+
+/// Parameters the page gets sliders for (the rest keep their values).
+pub const MAX_PARAMS: usize = 64;
 
 /// Sessions not polled for this long are dropped when a new one starts.
 const IDLE: Duration = Duration::from_secs(600);
