@@ -10,6 +10,7 @@ mod parts;
 mod pores;
 mod slice;
 mod structures;
+mod studio;
 mod threemf;
 mod to_fidget;
 
@@ -48,6 +49,10 @@ const SUITES: &[(&str, &str)] = &[
         "Kou-Tan bone (>1000 pores): build, mesh at 256^3, slicing vs a gyroid of the same cell",
     ),
     (
+        "studio",
+        "microfrep serve: edit to first preview mesh and to refined mesh, three examples",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -73,6 +78,7 @@ fn main() {
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),
         "3mf" => threemf::run(),
+        "studio" => studio::run(),
         "" => Err(usage()),
         other => Err(format!("unknown suite '{other}'\n{}", usage())),
     };

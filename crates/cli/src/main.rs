@@ -9,6 +9,7 @@ mod common;
 mod eval_cmd;
 mod mesh_cmd;
 mod render_cmd;
+mod serve_cmd;
 mod slice_cmd;
 mod voxels_cmd;
 
@@ -48,6 +49,8 @@ enum Cmd {
     Voxels(voxels_cmd::VoxelsArgs),
     /// Volume fraction, surface area, connectivity and thickness, with their accuracy.
     Analyze(analyze_cmd::AnalyzeArgs),
+    /// The studio: edit a model in the browser with a live 3D view and analysis.
+    Serve(serve_cmd::ServeArgs),
 }
 
 fn list_examples(only: Option<&str>) -> anyhow::Result<()> {
@@ -95,6 +98,7 @@ fn main() {
         Cmd::Render(a) => render_cmd::run(a),
         Cmd::Voxels(a) => voxels_cmd::run(a),
         Cmd::Analyze(a) => analyze_cmd::run(a),
+        Cmd::Serve(a) => serve_cmd::run(a),
     };
     if let Err(e) = res {
         if broken_pipe(&e) {

@@ -1,0 +1,638 @@
+//! Every call the studio makes into the other microfrep crates, in one
+//! place: loading HyperFun, bounds, meshing, analysis, sections, renders,
+//! slice stacks and STL. The rest of the crate sees only the plain types
+//! defined here, so a change of those crates' APIs is a change of this file.
+//!
+//! Long calls take `check: &(dyn Fn() + Sync)`, called between units of work
+//! (a brick, a layer, a slab). The caller's `check` unwinds (with
+//! [`std::panic::resume_unwind`]) to stop a stale or over-long job; nothing
+//! here catches that unwind.
+
+use microfrep_analysis::thickness::{PhaseThickness, Thickness, ThicknessStats};
+use microfrep_analysis::{AnalyzeOptions, Report};
+use microfrep_core::shape::BoundsOptions;
+use microfrep_core::{BatchEval, PointEval, Shape};
+use microfrep_hyperfun::{lower, Diagnostic, Diagnostics, Severity};
+use microfrep_mesh::{memory, MeshOptions, Plan};
+use rayon::prelude::*;
+use serde_json::{json, Value};
+use std::io::Cursor;
+use std::path::Path;
+use std::sync::{Arc, Once};
+
+/// Why an engine call failed: a message for the page.
+#[derive(Debug, thiserror::Error)]
+pub enum EngineError {
+    /// The job is bigger than the limits allow (memory, evaluation cost).
+    #[error("{0}")]
+    Limit(String),
+    /// Meshing failed.
+    #[error("meshing: {0}")]
+    Mesh(#[from] microfrep_mesh::MeshError),
+    /// Analysis failed.
+    #[error("analysis: {0}")]
+    Analysis(#[from] microfrep_analysis::AnalysisError),
+    /// Slicing failed.
+    #[error("slicing: {0}")]
+    Fab(#[from] microfrep_fab::FabError),
+    /// Rendering failed.
+    #[error("rendering: {0}")]
+    Render(#[from] microfrep_render::RenderError),
+    /// The model's bounds could not be found.
+    #[error("{0}")]
+    Bounds(#[from] microfrep_core::BoundsError),
+    /// Encoding an output in memory failed.
+    #[error("encoding {what}")]
+    Encode {
+        /// What was being encoded.
+        what: &'static str,
+        /// The writer's error.
+        source: std::io::Error,
+    },
+}
+
+/// One diagnostic of a model, as `microfrep check` reports it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diag {
+    /// True for an error, false for a warning.
+    pub error: bool,
+    /// 1-based line (0 when the message has no position).
+    pub line: u32,
+    /// 1-based column (0 when the message has no position).
+    pub col: u32,
+    /// The message.
+    pub message: String,
+}
+
+/// A model that lowered: the shape every job takes and what the page shows.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The compiled model.
+    pub shape: Shape,
+    /// The evaluated object.
+    pub object: String,
+    /// All objects of the file, in order.
+    pub objects: Vec<String>,
+    /// `a[k]` parameters as (graph name `a1`, value).
+    pub params: Vec<(String, f64)>,
+    /// Whether the model lowered to the graph (false: evaluated per point).
+    pub lowered: bool,
+    /// Names of the shape's attribute channels.
+    pub attributes: Vec<String>,
+}
+
+/// The result of [`load`]: the model (if it lowered) and every diagnostic,
+/// also rendered as `check` prints them.
+#[derive(Debug)]
+pub struct LoadResult {
+    /// The model, when there was no error.
+    pub model: Option<Loaded>,
+    /// Errors and warnings in source order.
+    pub diags: Vec<Diag>,
+    /// `file:line:col: severity: message`, the line and a caret, per item.
+    pub rendered: String,
+}
+
+static INSTALL: Once = Once::new();
+
+/// Installs the `mf*` library into HyperFun (once per process).
+pub fn install() {
+    INSTALL.call_once(microfrep_structures_hf::install);
+}
+
+fn diag_of(d: &Diagnostic) -> Diag {
+    Diag {
+        error: d.severity == Severity::Error,
+        line: d.pos.line,
+        col: d.pos.col,
+        message: d.message.clone(),
+    }
+}
+
+/// Parses and lowers object `object` (default `my_model`, else the first)
+/// of `src` with `a[1..] = params`; the other objects are lowered too, as
+/// `microfrep check` does, so their errors are reported (the model is
+/// still returned when only those fail).
+pub fn load(src: &str, file: &str, object: Option<&str>, params: &[f64]) -> LoadResult {
+    install();
+    let options = microfrep_hyperfun::Options::default();
+    let (program, mut items) = match microfrep_hyperfun::parse_with(src, file, options) {
+        Ok((p, warnings)) => (Arc::new(p), warnings.items),
+        Err(d) => {
+            return LoadResult {
+                model: None,
+                diags: d.items.iter().map(diag_of).collect(),
+                rendered: d.render(src),
+            }
+        }
+    };
+    let registry = microfrep_hyperfun::library::Registry::standard();
+    let mut unlocated = Vec::new();
+    let chosen = lower::select_object(&program, object);
+    let mut model = None;
+    for i in 0..program.objects.len() {
+        let p = if Some(i) == chosen { params } else { &[] };
+        match lower::lower(program.clone(), i, &registry, p) {
+            Ok(m) if Some(i) == chosen => model = Some(m),
+            Ok(_) => {}
+            Err(e) if e.pos.line == 0 => unlocated.push(format!(
+                "object '{}': {}",
+                program.objects[i].name, e.message
+            )),
+            Err(e) => items.push(Diagnostic {
+                severity: Severity::Error,
+                pos: e.pos,
+                message: e.message,
+            }),
+        }
+    }
+    if chosen.is_none() {
+        unlocated.push(match object {
+            Some(n) => format!("no object named '{n}'"),
+            None => "the file defines no object".into(),
+        });
+    }
+    items.sort_by_key(|d| d.pos);
+    items.dedup();
+    let report = Diagnostics {
+        file: file.to_string(),
+        items,
+        ..Default::default()
+    };
+    let mut rendered = report.render(src);
+    let mut diags: Vec<Diag> = report.items.iter().map(diag_of).collect();
+    for m in unlocated {
+        rendered += &format!("{file}: error: {m}\n");
+        diags.push(Diag {
+            error: true,
+            line: 0,
+            col: 0,
+            message: m,
+        });
+    }
+    // Errors in other objects are reported, but do not stop the preview of
+    // the evaluated one.
+    let model = model.map(|m| {
+        let shape = m.shape();
+        Loaded {
+            attributes: shape.attributes().iter().map(|a| a.name.clone()).collect(),
+            shape,
+            object: m.object,
+            objects: m.objects,
+            params: m.params,
+            lowered: m.lowered,
+        }
+    });
+    LoadResult {
+        model,
+        diags,
+        rendered,
+    }
+}
+
+/// The model's proven bounds (interval subdivision), with `check` called
+/// as the search goes.
+pub fn prove_bounds(
+    shape: &Shape,
+    check: Arc<dyn Fn() + Send + Sync>,
+) -> Result<[[f64; 3]; 2], EngineError> {
+    let opts = BoundsOptions {
+        progress: Some(Arc::new(move |_| check())),
+        ..BoundsOptions::default()
+    };
+    Ok(shape.bounds_with(&opts)?.corners())
+}
+
+/// What evaluating the model at a few points showed.
+#[derive(Clone, Debug, Default)]
+pub struct Probe {
+    /// Points evaluated.
+    pub points: usize,
+    /// Seconds per point of the f64 point evaluator.
+    pub seconds_per_point: f64,
+    /// Run-time errors seen: (message, line, col, count), most frequent first.
+    pub errors: Vec<(String, u32, u32, usize)>,
+}
+
+/// Evaluates value and error code at up to `n^3` points spread over the
+/// box, stopping early once `budget_s` seconds are spent or `stop()` is
+/// true (checked between points).
+pub fn probe(
+    shape: &Shape,
+    bounds: [[f64; 3]; 2],
+    n: usize,
+    budget_s: f64,
+    stop: &dyn Fn() -> bool,
+) -> Probe {
+    let tape = shape.outputs();
+    let mut pe = PointEval::new(tape);
+    let t = std::time::Instant::now();
+    let mut sites: Vec<(String, u32, u32, usize)> = Vec::new();
+    let mut points = 0;
+    let at = |a: usize, i: usize| {
+        let f = (i as f64 + 0.5) / n as f64;
+        bounds[0][a] + f * (bounds[1][a] - bounds[0][a])
+    };
+    'outer: for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                if stop() || (points > 0 && t.elapsed().as_secs_f64() > budget_s) {
+                    break 'outer;
+                }
+                let out = pe.eval_all([at(0, i), at(1, j), at(2, k)]);
+                points += 1;
+                let code = shape.error_output().map_or(0.0, |e| out[e]);
+                if let Some(e) = shape.runtime_error(code) {
+                    match sites
+                        .iter_mut()
+                        .find(|s| s.0 == e.message && s.1 == e.line && s.2 == e.col)
+                    {
+                        Some(s) => s.3 += 1,
+                        None => sites.push((e.message, e.line, e.col, 1)),
+                    }
+                }
+            }
+        }
+    }
+    sites.sort_by_key(|s| std::cmp::Reverse(s.3));
+    Probe {
+        points,
+        seconds_per_point: t.elapsed().as_secs_f64() / points.max(1) as f64,
+        errors: sites,
+    }
+}
+
+/// A mesh ready for the page: positions, outward unit normals, per-vertex
+/// attribute values and counter-clockwise triangles.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    /// Cells on the longest side it was made with.
+    pub resolution: usize,
+    /// Vertex positions.
+    pub vertices: Vec<[f32; 3]>,
+    /// Unit outward normals (zero where the gradient vanishes).
+    pub normals: Vec<[f32; 3]>,
+    /// Per attribute channel, its value at each vertex.
+    pub attributes: Vec<Vec<f32>>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Why the resolution is lower than asked, if it is.
+    pub note: Option<String>,
+}
+
+/// Meshes the model in `bounds` at `resolution` cells on the longest side;
+/// above 64 cells the peak memory is predicted first
+/// ([`microfrep_mesh::memory::estimate`]) and the resolution lowered to fit
+/// `memory_limit` bytes. `check` is called after every brick.
+pub fn mesh(
+    shape: &Shape,
+    bounds: [[f64; 3]; 2],
+    resolution: usize,
+    memory_limit: f64,
+    check: &(dyn Fn() + Sync),
+) -> Result<MeshData, EngineError> {
+    let mut opts = MeshOptions::new(bounds, resolution);
+    // Smaller bricks than the default: a stale job stops sooner.
+    opts.brick = 16;
+    let mut plan = Plan::new(shape, &opts)?;
+    let mut note = None;
+    // At 64 cells or fewer the mesh is small whatever the model (at most a
+    // few tens of MB), so the estimate's sampling is not worth its time.
+    if resolution > 64 {
+        let e = memory::estimate(&plan);
+        if e.bytes > memory_limit {
+            let fit = memory::resolution_fitting(&e, resolution, memory_limit);
+            if fit < 8 {
+                return Err(EngineError::Limit(format!(
+                    "meshing at {resolution} cells would need about {:.0} MiB, over the \
+                     limit of {:.0} MiB",
+                    e.bytes / MIB,
+                    memory_limit / MIB
+                )));
+            }
+            note = Some(format!(
+                "resolution lowered from {resolution} to {fit}: {resolution} would need about \
+                 {:.0} MiB (limit {:.0} MiB)",
+                e.bytes / MIB,
+                memory_limit / MIB
+            ));
+            opts.resolution = fit;
+            plan = Plan::new(shape, &opts)?;
+        }
+    }
+    check();
+    let m = plan.run(&|_| check())?;
+    check();
+    let normals = plan.normals(&m);
+    check();
+    let attributes = attribute_values(shape, &m.vertices);
+    Ok(MeshData {
+        resolution: opts.resolution,
+        vertices: m.vertices,
+        normals,
+        attributes,
+        triangles: m.triangles,
+        note,
+    })
+}
+
+/// Each attribute channel of the shape evaluated at `points`.
+pub fn attribute_values(shape: &Shape, points: &[[f32; 3]]) -> Vec<Vec<f32>> {
+    let tape = shape.outputs();
+    (0..shape.attributes().len())
+        .map(|k| {
+            let out = shape.attribute_output(k);
+            let mut vals = vec![0f32; points.len()];
+            vals.par_chunks_mut(4096)
+                .zip(points.par_chunks(4096))
+                .for_each_init(
+                    || BatchEval::new(tape),
+                    |ev, (dst, src)| {
+                        let x: Vec<f32> = src.iter().map(|p| p[0]).collect();
+                        let y: Vec<f32> = src.iter().map(|p| p[1]).collect();
+                        let z: Vec<f32> = src.iter().map(|p| p[2]).collect();
+                        ev.eval_output(out, &x, &y, &z, dst);
+                    },
+                );
+            vals
+        })
+        .collect()
+}
+
+/// Binary STL of a mesh, in memory.
+pub fn stl_bytes(mesh: &MeshData) -> Result<Vec<u8>, EngineError> {
+    let enc = |source| EngineError::Encode {
+        what: "STL",
+        source,
+    };
+    let mut w = microfrep_mesh::write::StlWriter::new(Cursor::new(Vec::new())).map_err(enc)?;
+    for t in &mesh.triangles {
+        w.push(t.map(|i| mesh.vertices[i as usize])).map_err(enc)?;
+    }
+    Ok(w.finish().map_err(enc)?.into_inner())
+}
+
+/// Watertightness of a mesh: (closed 2-manifold, Euler characteristic).
+pub fn mesh_check(mesh: &MeshData) -> (bool, i64) {
+    let m = microfrep_mesh::Mesh {
+        vertices: mesh.vertices.clone(),
+        triangles: mesh.triangles.clone(),
+    };
+    let r = microfrep_mesh::check::check(&m);
+    (r.is_closed_manifold(), r.euler)
+}
+
+/// Volume fraction, porosity, area, connectivity and percolation of the
+/// model in `bounds` on a grid of `resolution` voxels on the longest side,
+/// as the JSON of `microfrep analyze --json --no-thickness` (same keys).
+/// `check` is called per brick and per layer.
+pub fn analyze(
+    shape: &Shape,
+    bounds: [[f64; 3]; 2],
+    resolution: usize,
+    memory_limit: u64,
+    check: &(dyn Fn() + Sync),
+) -> Result<Value, EngineError> {
+    let grid = microfrep_analysis::Grid::new(bounds, resolution)?;
+    let opts = AnalyzeOptions {
+        connectivity: true,
+        thickness: false,
+        memory_limit,
+        ..AnalyzeOptions::default()
+    };
+    let r = microfrep_analysis::analyze(shape, None, grid, &opts, &|_, _, _| check())?;
+    Ok(report_json(&r))
+}
+
+/// The keys and values of `microfrep analyze --json` (crates/cli/src/analyze_cmd.rs).
+fn report_json(r: &Report) -> Value {
+    let g = &r.grid;
+    let m = &r.measures;
+    let conn = r.connectivity.as_ref().map(|c| {
+        json!({
+            "solid_connectivity": 26,
+            "pore_connectivity": 6,
+            "solid_components": c.solid_components,
+            "solid_volumes": c.solid_volumes,
+            "pore_components": c.pore_components,
+            "pore_volume": c.pore_volume,
+            "open_pore_volume": c.open_pore_volume,
+            "open_pore_fraction": c.open_pore_fraction(),
+            "closed_pores": c.closed_pores,
+            "closed_pore_volume": c.closed_pore_volume,
+            "percolates": { "x": c.percolates[0], "y": c.percolates[1], "z": c.percolates[2] },
+            "euler_solid": c.euler,
+            "euler_surface": c.surface_euler(),
+        })
+    });
+    json!({
+        "region": null,
+        "bounds": [g.lo, g.hi],
+        "dims": g.dims,
+        "voxel": g.step,
+        "volume": { "value": r.volume(), "error": r.volume_error(), "coarse": m.volume.coarse },
+        "region_volume": { "value": r.region_volume(), "error": r.region_volume_error() },
+        "volume_fraction": { "value": r.volume_fraction(), "error": r.volume_fraction_error() },
+        "porosity": { "value": r.porosity(), "error": r.volume_fraction_error() },
+        "area": { "value": r.area(), "error": r.area_error(), "coarse": m.area.coarse },
+        "specific_surface": { "value": r.specific_surface(), "error": r.specific_surface_error() },
+        "proven_volume": m.proven_volume,
+        "bricks": { "sampled": m.sampled_bricks, "total": m.bricks },
+        "refine_depth": m.refine_depth,
+        "creased_cells": m.creased_cells,
+        "connectivity": conn,
+        "thickness": r.thickness.as_ref().map(thickness_json),
+        "seconds": { "measure": r.seconds[0], "connectivity": r.seconds[1], "thickness": r.seconds[2] },
+    })
+}
+
+fn thickness_json(t: &Thickness) -> Value {
+    let phase = |p: &PhaseThickness| match p {
+        PhaseThickness::Skipped => json!("skipped"),
+        PhaseThickness::Empty => json!("empty"),
+        PhaseThickness::Unbounded { voxels } => json!({ "unbounded": true, "voxels": voxels }),
+        PhaseThickness::Measured(s) => stats_json(s),
+    };
+    json!({
+        "voxel": t.voxel,
+        "solid": phase(&t.solid),
+        "pore": phase(&t.pore),
+        "slabs": t.slabs,
+        "diameter_cap": t.diameter_cap,
+    })
+}
+
+fn stats_json(s: &ThicknessStats) -> Value {
+    json!({
+        "voxels": s.voxels,
+        "mean": s.mean,
+        "min": s.min,
+        "p10": s.p10,
+        "median": s.median,
+        "p90": s.p90,
+        "max": s.max,
+    })
+}
+
+/// The model's value on the plane `axis = value` across the box, as a PNG
+/// (blue outside, white at zero, red inside, the zero contour black).
+pub fn section_png(
+    shape: &Shape,
+    axis: usize,
+    value: f64,
+    bounds: [[f64; 3]; 2],
+    width: usize,
+    height: usize,
+) -> Result<Vec<u8>, EngineError> {
+    microfrep_render::camera::check_size(width, height)?;
+    let plane = microfrep_render::Plane { axis, value };
+    let img = microfrep_render::section(shape, plane, bounds[0], bounds[1], width, height);
+    img.encode_png().map_err(|e| EngineError::Encode {
+        what: "PNG",
+        source: std::io::Error::other(e),
+    })
+}
+
+/// A ray-cast image of the model from `view` (`iso`, `front`, `top`,
+/// `side`), optionally cut away, as a PNG: the page's view where the
+/// browser has no WebGL.
+pub fn render_png(
+    shape: &Shape,
+    view: &str,
+    cutaway: bool,
+    bounds: [[f64; 3]; 2],
+    width: usize,
+    height: usize,
+) -> Result<Vec<u8>, EngineError> {
+    microfrep_render::camera::check_size(width, height)?;
+    let view: microfrep_render::View = view.parse()?;
+    let cut;
+    let shape = if cutaway {
+        cut = microfrep_render::cutaway(shape, view, bounds[0], bounds[1]);
+        &cut
+    } else {
+        shape
+    };
+    let cam = microfrep_render::Camera::fit(view, bounds[0], bounds[1], width, height);
+    let img = microfrep_render::ray_cast(shape, &cam, bounds[0], bounds[1]);
+    img.encode_png().map_err(|e| EngineError::Encode {
+        what: "PNG",
+        source: std::io::Error::other(e),
+    })
+}
+
+/// Slice stack formats the studio offers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SliceFormat {
+    /// 1-bit PNG per layer.
+    Png,
+    /// 8-bit area-coverage PNG per layer.
+    PngAa,
+    /// SVG contours per layer.
+    Svg,
+    /// One Common Layer Interface file.
+    Cli,
+}
+
+/// Layers and pixels of a slice stack of the box, without slicing:
+/// `(nx, ny, layers)`, or the slicer's error for bad steps.
+pub fn slice_dims(
+    bounds: [[f64; 3]; 2],
+    layer: f64,
+    pixel: f64,
+) -> Result<(usize, usize, usize), EngineError> {
+    let g = microfrep_fab::SliceGrid::new(bounds[0], bounds[1], layer, pixel)?;
+    Ok((g.nx, g.ny, g.layers))
+}
+
+/// Slices the model in `bounds` into `out` (which must not exist): a
+/// directory of layer files with `manifest.json`, or one `.cli` file.
+/// `check` is called after every layer.
+pub fn write_slices(
+    shape: &Shape,
+    bounds: [[f64; 3]; 2],
+    layer: f64,
+    pixel: f64,
+    format: SliceFormat,
+    out: &Path,
+    check: &(dyn Fn() + Sync),
+) -> Result<(), EngineError> {
+    let grid = microfrep_fab::SliceGrid::new(bounds[0], bounds[1], layer, pixel)?;
+    let format = match format {
+        SliceFormat::Png => microfrep_fab::Format::Png { aa: false },
+        SliceFormat::PngAa => microfrep_fab::Format::Png { aa: true },
+        SliceFormat::Svg => microfrep_fab::Format::Svg,
+        SliceFormat::Cli => microfrep_fab::Format::Cli,
+    };
+    microfrep_fab::write_stack(shape, &grid, &format, out, check)?;
+    Ok(())
+}
+
+/// Bytes the system reports available (`MemAvailable`), if known.
+pub fn memory_available() -> Option<f64> {
+    microfrep_io::limits::memory_limit()
+}
+
+const MIB: f64 = 1024.0 * 1024.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use microfrep_core::{prims, Expr};
+
+    #[test]
+    fn attribute_channels_are_evaluated_at_the_vertices() {
+        let p = Expr::xyz();
+        let ball = prims::sphere(&p, &prims::v3([0.0; 3]), 0.7);
+        // Two channels: height, and squared distance from the z axis.
+        let shape = Shape::new(ball)
+            .with_attribute("height", p[2].clone())
+            .with_attribute("r2", p[0].square() + p[1].square());
+        let m = mesh(&shape, [[-1.0; 3], [1.0; 3]], 24, 1e9, &|| {}).unwrap();
+        assert_eq!(m.attributes.len(), 2);
+        assert!(!m.vertices.is_empty());
+        for (i, v) in m.vertices.iter().enumerate() {
+            assert!((m.attributes[0][i] - v[2]).abs() < 1e-6);
+            assert!((m.attributes[1][i] - (v[0] * v[0] + v[1] * v[1])).abs() < 1e-5);
+        }
+        let (closed, euler) = mesh_check(&m);
+        assert!(closed && euler == 2);
+        let stl = stl_bytes(&m).unwrap();
+        assert_eq!(stl.len(), 84 + 50 * m.triangles.len());
+    }
+
+    #[test]
+    fn diagnostics_match_check() {
+        let src = "my_model(x[3], a[1]) {\n  my_model = 1 - ;\n}\nother(x[3], a[1]) {\n  other = zz(x);\n}\n";
+        let r = load(src, "t.hf", None, &[]);
+        assert!(r.model.is_none());
+        assert_eq!(r.diags[0].line, 2);
+        assert!(r.diags[0].error);
+        assert!(r.rendered.starts_with("t.hf:2:"), "{}", r.rendered);
+        // The evaluated object is fine, another object is not: the error is
+        // reported and the model still shown.
+        let src = "my_model(x[3], a[1]) {\n  my_model = 1 - x[1];\n}\nother(x[3], a[1]) {\n  other = mfTpms(x, 9, 0, 1, 0);\n}\n";
+        let r = load(src, "t.hf", None, &[]);
+        assert!(
+            r.diags.iter().any(|d| d.error && d.line == 5),
+            "{:?}",
+            r.diags
+        );
+        assert_eq!(r.model.unwrap().object, "my_model");
+        let r = load(src, "t.hf", Some("other"), &[]);
+        assert!(r.model.is_none());
+        let ok = load(
+            "my_model(x[3], a[2]) { my_model = a[1] - x[1]; }",
+            "t.hf",
+            None,
+            &[0.5],
+        );
+        let m = ok.model.unwrap();
+        assert_eq!(
+            m.params,
+            vec![("a1".to_string(), 0.5), ("a2".to_string(), 0.0)]
+        );
+        assert!(m.attributes.is_empty());
+        assert_eq!(m.shape.point().eval([0.25, 0.0, 0.0]), 0.25);
+    }
+}
