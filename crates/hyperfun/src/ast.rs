@@ -36,6 +36,8 @@ pub struct Object {
     pub a_size: usize,
     /// 1 when the header omits `s`.
     pub s_size: usize,
+    /// Whether the header declares `s[k]` (the object's attributes).
+    pub s_declared: bool,
     pub arrays: Vec<ArrayDecl>,
     pub body: Vec<Stmt>,
     /// The final `name = expr;`.

@@ -54,6 +54,8 @@ pub struct CheckReport {
     pub evaluated: Option<(String, usize)>,
     /// Whether the evaluated object needs the per-point interpreter.
     pub per_point: bool,
+    /// Why, and where (the loop or call that depends on the point).
+    pub per_point_reason: Option<lower::PerPoint>,
     /// Errors and warnings with positions.
     pub diagnostics: Diagnostics,
     /// Errors without a position (e.g. no such object).
@@ -90,12 +92,14 @@ pub fn check(src: &str, file: &str, object: Option<&str>) -> Result<CheckReport,
     }
     let mut evaluated = None;
     let mut per_point = false;
+    let mut per_point_reason = None;
     match lower::select_object(&program, object) {
         Some(i) => {
             let o = &program.objects[i];
             evaluated = Some((o.name.clone(), o.a_size));
             if let Ok(m) = lower::lower(program.clone(), i, &registry, &[]) {
                 per_point = !m.lowered;
+                per_point_reason = m.per_point;
             }
         }
         None => unlocated.push(match object {
@@ -114,6 +118,7 @@ pub fn check(src: &str, file: &str, object: Option<&str>) -> Result<CheckReport,
         objects,
         evaluated,
         per_point,
+        per_point_reason,
         diagnostics: Diagnostics {
             file: file.to_string(),
             items,

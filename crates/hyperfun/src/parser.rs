@@ -236,7 +236,7 @@ impl<'a> Parser<'a> {
             name: name.clone(),
             sizes: None,
         });
-        let Ok(sizes) = self.header() else {
+        let Ok((sizes, s_declared)) = self.header() else {
             // Skip the rest of an object whose header is broken.
             while !self.eof() && !self.at("}") {
                 self.bump();
@@ -259,6 +259,7 @@ impl<'a> Parser<'a> {
             x_size: sizes[0],
             a_size: sizes[1],
             s_size: sizes[2],
+            s_declared,
             arrays,
             body,
             result: result?,
@@ -266,23 +267,24 @@ impl<'a> Parser<'a> {
         })
     }
 
-    /// `(x[n], a[m] [, s[k]]) {`
-    fn header(&mut self) -> PResult<[usize; 3]> {
+    /// `(x[n], a[m] [, s[k]]) {`: the three sizes, and whether `s` is given.
+    fn header(&mut self) -> PResult<([usize; 3], bool)> {
         self.expect("(", "Left parenthes expected")?;
         self.expect_kw("x", "\"X\" expected")?;
         let x = self.size()?;
         self.expect(",", "Comma expected")?;
         self.expect_kw("a", "\"A\" expected")?;
         let a = self.size()?;
-        let mut s = 1;
+        let (mut s, mut declared) = (1, false);
         if self.at(",") {
             self.bump();
             self.expect_kw("s", "\"S\" expected")?;
             s = self.size()?;
+            declared = true;
         }
         self.expect(")", "Right parenthes expected")?;
         self.expect("{", "Left brace expected")?;
-        Ok([x, a, s])
+        Ok(([x, a, s], declared))
     }
 
     /// `[NUM]`, rounded half up; at least 1.

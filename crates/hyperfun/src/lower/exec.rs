@@ -8,7 +8,7 @@ use super::ops::{self, Fault};
 use crate::ast::{self, BinOp, CmpOp, Cond, ExprKind, Object, Pos, Program, Stmt, UnOp};
 use crate::library::{Arg, Kind, Registry, EPS};
 use microfrep_core::Expr;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Loop iterations allowed when a model is lowered (once, at load; the
 /// reference would hang). Loops whose trip count is fixed run here, e.g. a
@@ -18,13 +18,37 @@ pub const LOOP_BUDGET: u64 = 1_000_000;
 /// the iterations of a heavy escape-time fractal, about 0.2 s of work.
 pub const POINT_LOOP_BUDGET: u64 = 100_000;
 
+/// Select nodes that merging the branches of point-dependent `if`s may add
+/// in all (each merged variable or array element adds one, nested `if`s
+/// merge again at every level). Past this the model takes the per-point
+/// fallback, so a pathological program cannot grow the graph without
+/// bound; real models stay far below (a loop of 100k iterations around an
+/// `if` that sets two variables adds 200k).
+pub const MERGE_BUDGET: u64 = 1 << 21;
+
 /// Why a model cannot become one expression graph.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Stop {
     /// Control flow depends on the point: use the per-point fallback.
-    NeedsPoint,
+    NeedsPoint(PerPoint),
     /// A static error (bad call between objects, ...), reported at load.
     Static(String, Pos),
+}
+
+/// Why a model runs on the per-point interpreter, and where.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PerPoint {
+    /// What depends on the point.
+    pub message: String,
+    /// The loop, call or `if` that needs it.
+    pub pos: Pos,
+}
+
+fn needs_point(message: impl Into<String>, pos: Pos) -> Stop {
+    Stop::NeedsPoint(PerPoint {
+        message: message.into(),
+        pos,
+    })
 }
 
 fn c(v: f64) -> Expr {
@@ -33,6 +57,22 @@ fn c(v: f64) -> Expr {
 
 fn is_true(e: &Expr) -> bool {
     e.as_const().is_some_and(|v| v != 0.0)
+}
+
+/// Whether two expressions are known to be the same (one node, or equal
+/// constants), so a `select` between them is either of them.
+fn same(a: &Expr, b: &Expr) -> bool {
+    std::ptr::eq(a.node(), b.node())
+        || matches!((a.as_const(), b.as_const()), (Some(x), Some(y)) if x.to_bits() == y.to_bits())
+}
+
+/// `select(cond, a, b)`, or `a` when both are the same.
+fn pick(cond: &Expr, a: &Expr, b: &Expr) -> Expr {
+    if same(a, b) {
+        a.clone()
+    } else {
+        Expr::select(cond.clone(), a.clone(), b.clone())
+    }
 }
 
 /// A variable cell: its value and whether it holds one (truth value).
@@ -52,20 +92,135 @@ impl Slot {
             init: c(0.0),
         }
     }
-}
-
-/// Variables of one activation. Arrays include `x`, `a` and `s`.
-#[derive(Clone, Default)]
-struct Env {
-    scalars: HashMap<String, Slot>,
-    arrays: HashMap<String, Vec<Slot>>,
+    fn same(&self, o: &Slot) -> bool {
+        same(&self.v, &o.v) && same(&self.init, &o.init)
+    }
 }
 
 /// `select` over slots: `cond` picks `a`, else `b`.
 fn merge(cond: &Expr, a: &Slot, b: &Slot) -> Slot {
     Slot {
-        v: Expr::select(cond.clone(), a.v.clone(), b.v.clone()),
-        init: Expr::select(cond.clone(), a.init.clone(), b.init.clone()),
+        v: pick(cond, &a.v, &b.v),
+        init: pick(cond, &a.init, &b.init),
+    }
+}
+
+/// A variable or one array element, as a branch records its writes.
+#[derive(Clone, PartialEq, Eq, Hash)]
+enum Key {
+    Scalar(String),
+    Elem(String, usize),
+}
+
+/// The writes of one branch of a point-dependent `if`: for each key, its
+/// value before the branch first wrote it (`None`: a scalar not yet
+/// defined). Undoing and merging a branch costs what the branch wrote, not
+/// the size of the environment.
+#[derive(Default)]
+struct Frame {
+    saved: Vec<(Key, Option<Slot>)>,
+    seen: HashSet<Key>,
+}
+
+/// Variables of one activation. Arrays include `x`, `a` and `s`.
+#[derive(Default)]
+struct Env {
+    scalars: HashMap<String, Slot>,
+    arrays: HashMap<String, Vec<Slot>>,
+    /// Branches of point-dependent `if`s being run, innermost last.
+    frames: Vec<Frame>,
+}
+
+impl Env {
+    fn get(&self, key: &Key) -> Option<Slot> {
+        match key {
+            Key::Scalar(n) => self.scalars.get(n).cloned(),
+            Key::Elem(n, k) => self.arrays.get(n).and_then(|a| a.get(*k)).cloned(),
+        }
+    }
+
+    /// Sets `key` without recording it.
+    fn put(&mut self, key: &Key, slot: Option<Slot>) {
+        match (key, slot) {
+            (Key::Scalar(n), Some(s)) => {
+                self.scalars.insert(n.clone(), s);
+            }
+            (Key::Scalar(n), None) => {
+                self.scalars.remove(n);
+            }
+            (Key::Elem(n, k), Some(s)) => {
+                if let Some(e) = self.arrays.get_mut(n).and_then(|a| a.get_mut(*k)) {
+                    *e = s;
+                }
+            }
+            (Key::Elem(..), None) => {}
+        }
+    }
+
+    /// Records `old` as the value of `key` before the innermost open
+    /// branch, unless that branch has written `key` already.
+    fn note(&mut self, key: &Key, old: Option<Slot>) {
+        if let Some(f) = self.frames.last_mut() {
+            if f.seen.insert(key.clone()) {
+                f.saved.push((key.clone(), old));
+            }
+        }
+    }
+
+    /// Writes `slot` to `key`, recording the old value in an open branch.
+    fn write(&mut self, key: Key, slot: Slot) {
+        if !self.frames.is_empty() {
+            let old = self.get(&key);
+            if old.as_ref().is_some_and(|o| o.same(&slot)) {
+                return;
+            }
+            self.note(&key, old);
+        }
+        self.put(&key, Some(slot));
+    }
+
+    fn set_scalar(&mut self, name: &str, slot: Slot) {
+        if self.frames.is_empty() {
+            self.scalars.insert(name.to_string(), slot);
+        } else {
+            self.write(Key::Scalar(name.to_string()), slot);
+        }
+    }
+
+    fn set_elem(&mut self, name: &str, k: usize, slot: Slot) {
+        if self.frames.is_empty() {
+            if let Some(e) = self.arrays.get_mut(name).and_then(|a| a.get_mut(k)) {
+                *e = slot;
+            }
+        } else {
+            self.write(Key::Elem(name.to_string(), k), slot);
+        }
+    }
+
+    /// Replaces the contents of an existing array. Element by element when
+    /// the length stays; a library call may write more or fewer elements
+    /// than the array holds, which changes its length: not inside a
+    /// point-dependent branch (the branches could disagree on it).
+    fn set_array(&mut self, name: &str, vals: Vec<Slot>, pos: Pos) -> Result<(), Stop> {
+        match self.arrays.get_mut(name) {
+            None => Ok(()),
+            Some(arr) if self.frames.is_empty() && arr.len() != vals.len() => {
+                *arr = vals;
+                Ok(())
+            }
+            Some(arr) if arr.len() != vals.len() => Err(needs_point(
+                format!(
+                    "a call changes the length of array '{name}' inside a point-dependent `if`"
+                ),
+                pos,
+            )),
+            Some(_) => {
+                for (k, v) in vals.into_iter().enumerate() {
+                    self.set_elem(name, k, v);
+                }
+                Ok(())
+            }
+        }
     }
 }
 
@@ -87,8 +242,17 @@ pub struct Exec<'p> {
     /// Truth value of "this statement runs" (inside point-dependent `if`s).
     guard: Expr,
     budget: u64,
+    /// Select nodes left for merging branches ([`MERGE_BUDGET`]).
+    merges: u64,
     /// Set when a loop ran out of iterations.
     pub limit_hit: bool,
+}
+
+/// What running the evaluated object gives: its value and the final
+/// contents of its attribute array `s`.
+pub struct Outcome {
+    pub value: Expr,
+    pub s: Vec<Expr>,
 }
 
 impl<'p> Exec<'p> {
@@ -111,6 +275,7 @@ impl<'p> Exec<'p> {
             sites: Vec::new(),
             guard: c(1.0),
             budget,
+            merges: MERGE_BUDGET,
             limit_hit: false,
         }
     }
@@ -141,14 +306,21 @@ impl<'p> Exec<'p> {
         }
     }
 
-    /// Runs object `obj` with the given inputs; returns its value.
-    pub fn run(&mut self, obj: &'p Object, inputs: Inputs) -> Result<Expr, Stop> {
+    /// Runs object `obj` with the given inputs. Its attributes `s` start at
+    /// 0 (the reference keeps them from the previous evaluation, which is
+    /// 0 at the first one); they count as assigned.
+    pub fn run(&mut self, obj: &'p Object, inputs: Inputs) -> Result<Outcome, Stop> {
         let mut env = Env::default();
         env.arrays.insert("x".into(), fit(inputs.x, obj.x_size));
         env.arrays.insert("a".into(), fit(inputs.a, obj.a_size));
         env.arrays
             .insert("s".into(), vec![Slot::set(c(0.0)); obj.s_size.max(1)]);
-        self.call_body(obj, &mut env)
+        let value = self.call_body(obj, &mut env)?;
+        let s = env.arrays.remove("s").unwrap_or_default();
+        Ok(Outcome {
+            value,
+            s: s.into_iter().map(|slot| slot.v).collect(),
+        })
     }
 
     fn call_body(&mut self, obj: &'p Object, env: &mut Env) -> Result<Expr, Stop> {
@@ -181,7 +353,7 @@ impl<'p> Exec<'p> {
         match s {
             Stmt::Assign { name, value, .. } => {
                 let v = self.expr(value, env)?;
-                env.scalars.insert(name.clone(), Slot::set(v));
+                env.set_scalar(name, Slot::set(v));
             }
             Stmt::AssignIndex {
                 name, index, value, ..
@@ -192,41 +364,48 @@ impl<'p> Exec<'p> {
                 let i = ops::hf_round(&i);
                 let n = env.arrays.get(name).map_or(0, Vec::len);
                 self.fault(i.lt(1.0).or(i.gt(n as f64)), ops::INDEX_RANGE, index.pos);
-                let arr = env.arrays.entry(name.clone()).or_default();
                 match i.as_const() {
                     Some(k) => {
                         if k >= 1.0 && k <= n as f64 {
-                            arr[k as usize - 1] = Slot::set(v);
+                            env.set_elem(name, k as usize - 1, Slot::set(v));
                         }
                     }
                     None => {
-                        for (k, slot) in arr.iter_mut().enumerate() {
-                            *slot = merge(&i.eq_((k + 1) as f64), &Slot::set(v.clone()), slot);
+                        let new = Slot::set(v);
+                        for k in 0..n {
+                            let old = env.arrays[name][k].clone();
+                            let m = merge(&i.eq_((k + 1) as f64), &new, &old);
+                            env.set_elem(name, k, m);
                         }
                     }
                 }
             }
-            Stmt::AssignArray { name, values, .. } => {
+            Stmt::AssignArray { name, values, pos } => {
                 let arr = values.iter().map(|&v| Slot::set(c(v))).collect();
-                env.arrays.insert(name.clone(), arr);
+                env.set_array(name, arr, *pos)?;
             }
             Stmt::If {
                 cond,
                 then_body,
                 else_body,
-                ..
+                pos,
             } => {
                 let t = self.cond(cond, env)?;
                 match t.as_const() {
                     Some(v) if v != 0.0 => self.block(then_body, env)?,
                     Some(_) => self.block(else_body, env)?,
-                    None => self.branch(&t, then_body, else_body, env)?,
+                    None => self.branch(&t, then_body, else_body, *pos, env)?,
                 }
             }
             Stmt::While { cond, body, pos } => loop {
                 let t = self.cond(cond, env)?;
                 match t.as_const() {
-                    None => return Err(Stop::NeedsPoint),
+                    None => {
+                        return Err(needs_point(
+                            "the condition of this loop depends on the point",
+                            *pos,
+                        ))
+                    }
                     Some(0.0) => break,
                     Some(_) => {}
                 }
@@ -245,34 +424,63 @@ impl<'p> Exec<'p> {
         Ok(())
     }
 
-    /// Both branches of a point-dependent `if`, merged with `select`.
-    fn branch(&mut self, t: &Expr, yes: &[Stmt], no: &[Stmt], env: &mut Env) -> Result<(), Stop> {
+    /// Both branches of a point-dependent `if`, merged with `select`. Each
+    /// branch runs under its condition (so its error sites count only
+    /// where it is taken) on the state before the `if`, recording what it
+    /// writes; every variable or element written by either branch then
+    /// holds `select(t, then-value, else-value)`.
+    fn branch(
+        &mut self,
+        t: &Expr,
+        yes: &[Stmt],
+        no: &[Stmt],
+        pos: Pos,
+        env: &mut Env,
+    ) -> Result<(), Stop> {
         let outer = self.guard.clone();
-        let mut env_yes = env.clone();
         self.guard = outer.and(t);
-        self.block(yes, &mut env_yes)?;
-        self.guard = outer.and(t.not());
-        self.block(no, env)?;
-        self.guard = outer;
-        let env_no = std::mem::take(env);
-        let names: std::collections::BTreeSet<&String> = env_yes
-            .scalars
-            .keys()
-            .chain(env_no.scalars.keys())
-            .collect();
-        for n in names {
-            let a = env_yes.scalars.get(n).cloned().unwrap_or_else(Slot::unset);
-            let b = env_no.scalars.get(n).cloned().unwrap_or_else(Slot::unset);
-            env.scalars.insert(n.clone(), merge(t, &a, &b));
+        env.frames.push(Frame::default());
+        let r = self.block(yes, env);
+        let yes_frame = env.frames.pop().expect("pushed above");
+        r?;
+        // The then-values; back to the state before the `if`.
+        let mut taken = Vec::with_capacity(yes_frame.saved.len());
+        for (key, old) in yes_frame.saved {
+            let now = env.get(&key);
+            env.put(&key, old.clone());
+            taken.push((key, old, now));
         }
-        for (n, b) in &env_no.arrays {
-            let m = match env_yes.arrays.get(n) {
-                Some(a) if a.len() == b.len() => {
-                    a.iter().zip(b).map(|(a, b)| merge(t, a, b)).collect()
-                }
-                _ => b.clone(),
-            };
-            env.arrays.insert(n.clone(), m);
+        self.guard = outer.and(t.not());
+        env.frames.push(Frame::default());
+        let r = self.block(no, env);
+        let no_frame = env.frames.pop().expect("pushed above");
+        self.guard = outer;
+        r?;
+        let only_no = no_frame
+            .saved
+            .into_iter()
+            .filter(|(key, _)| !yes_frame.seen.contains(key))
+            .map(|(key, old)| (key, old.clone(), old));
+        let all: Vec<_> = taken.into_iter().chain(only_no).collect();
+        for (key, before, then_v) in all {
+            let else_v = env.get(&key);
+            let a = then_v.unwrap_or_else(Slot::unset);
+            let b = else_v.unwrap_or_else(Slot::unset);
+            let m = merge(t, &a, &b);
+            let added = u64::from(!same(&m.v, &a.v)) + u64::from(!same(&m.init, &a.init));
+            if added > self.merges {
+                return Err(needs_point(
+                    format!(
+                        "merging the branches of point-dependent `if`s would add more than \
+                         {MERGE_BUDGET} select nodes"
+                    ),
+                    pos,
+                ));
+            }
+            self.merges -= added;
+            // An enclosing branch learns the value from before this `if`.
+            env.note(&key, before);
+            env.put(&key, Some(m));
         }
         Ok(())
     }
@@ -452,7 +660,11 @@ impl<'p> Exec<'p> {
             }
             let out = (f.build)(&vals);
             if out.needs_constants {
-                return Err(Stop::NeedsPoint);
+                let shown = crate::library::shapes::display_name(name);
+                return Err(needs_point(
+                    format!("{shown} needs a constant argument that depends on the point"),
+                    pos,
+                ));
             }
             if let Some(m) = out.error {
                 let shown = crate::library::shapes::display_name(name);
@@ -460,9 +672,7 @@ impl<'p> Exec<'p> {
             }
             for (k, v) in out.writes {
                 if let ExprKind::Var(n) = &args[k].kind {
-                    if let Some(arr) = env.arrays.get_mut(n) {
-                        *arr = v.into_iter().map(Slot::set).collect();
-                    }
+                    env.set_array(n, v.into_iter().map(Slot::set).collect(), pos)?;
                 }
             }
             return Ok(out.value);
@@ -534,8 +744,8 @@ impl<'p> Exec<'p> {
             .or_insert_with(|| vec![Slot::set(c(0.0))]);
         let v = self.call_body(obj, &mut callee)?;
         if let Some(sname) = names.get(2) {
-            env.arrays
-                .insert(sname.clone(), callee.arrays.remove("s").unwrap_or_default());
+            let s = callee.arrays.remove("s").unwrap_or_default();
+            env.set_array(sname, s, pos)?;
         }
         Ok(v)
     }

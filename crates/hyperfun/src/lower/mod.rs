@@ -1,10 +1,24 @@
 //! Lowering a parsed HyperFun program to the core graph.
 //!
-//! A model becomes two expressions: the value and an error code (0 = fine,
-//! `k` = entry `k - 1` of the error table). Compiled together with
-//! `Tape::with_outputs`, both run at the core's speed in every evaluation
-//! mode. Models whose control flow depends on the point evaluate through the
-//! per-point fallback (same executor, constant inputs) wrapped as a `Field`.
+//! A model becomes expressions: the value, an error code (0 = fine, `k` =
+//! entry `k - 1` of the error table) and its attributes `s[1..=n]`.
+//! Compiled together with `Tape::with_outputs` (or as a [`Shape`] with
+//! attribute channels `s1..sn`), they run at the core's speed in every
+//! evaluation mode.
+//!
+//! The program is executed symbolically: statements run in order on
+//! expressions. An `if` whose condition depends on the point runs both
+//! branches, each under its condition, and merges every variable and array
+//! element either branch wrote with `select` (HyperFun truth `|v| >= EPS`);
+//! an error site inside a branch counts only where the branch is taken.
+//! Loops whose condition stays constant (a fixed trip count) are unrolled.
+//! What cannot become one graph takes the per-point fallback (the same
+//! executor with constant inputs, each output wrapped as a `Field`, no
+//! interval bounds): a `while` whose condition depends on the point (its
+//! trip count, and so the size of the graph, would vary from point to
+//! point), a library call whose constant argument depends on the point,
+//! and branch merging past [`MERGE_BUDGET`] select nodes. [`Model::per_point`]
+//! says why.
 
 mod census;
 mod check;
@@ -23,6 +37,8 @@ use crate::ast::{Pos, Program};
 use crate::library::Registry;
 pub(crate) use exec::grow;
 use exec::{Exec, Inputs, Stop};
+pub use exec::{PerPoint, MERGE_BUDGET};
+use fallback::{Channel, Output};
 use microfrep_core::{Expr, PointEval, Shape, Tape};
 use std::sync::Arc;
 
@@ -41,15 +57,29 @@ pub struct Model {
     pub value: Expr,
     /// Error code: 0, or a code resolved by `errors`.
     pub error: Expr,
+    /// The error sites behind the codes of `error`.
     pub errors: ErrorTable,
+    /// The attributes `s[1..=n]` of the evaluated object as they stand
+    /// when its evaluation ends (material fractions, colours): one per
+    /// entry of the `s[n]` its header declares, none when it declares no
+    /// `s`. An entry the program never assigns is 0 (the reference starts
+    /// `s` at 0 and then keeps each point's values for the next point; here
+    /// every point starts from 0, so results do not depend on the order of
+    /// evaluation). Calls `obj(x, a, s)` write the callee's final `s` back,
+    /// as in the reference. NaN wherever the model raises a run-time error,
+    /// like the value.
+    pub attributes: Vec<Expr>,
     /// `a[k]` parameters as `(name, value)`: names `a1`, `a2`, ... are the
     /// `Expr::param` names of the lowered graph.
     pub params: Vec<(String, f64)>,
     /// False when the model runs through the per-point fallback (parameters
     /// are then fixed at load time and intervals are unbounded).
     pub lowered: bool,
-    /// The per-point interpreter, when `lowered` is false.
-    interp: Option<Arc<fallback::Interp>>,
+    /// Why the model runs per point, when `lowered` is false.
+    pub per_point: Option<PerPoint>,
+    /// The per-point interpreter of this object (what the fallback runs,
+    /// and [`Model::interpreted`] for a lowered model).
+    interp: Arc<fallback::Interp>,
 }
 
 /// A static error found while lowering (message, position).
@@ -157,6 +187,15 @@ pub fn lower(
         .collect();
     let names: Vec<String> = (1..=obj.a_size).map(|k| format!("a{k}")).collect();
     let table = ErrorTable::default();
+    let n_attr = if obj.s_declared { obj.s_size } else { 0 };
+    let interp = Arc::new(fallback::Interp::new(
+        program.clone(),
+        object,
+        registry.clone(),
+        table.clone(),
+        pvals.clone(),
+        n_attr,
+    ));
     let mut ex = Exec::new(&program, registry, &table);
     let inputs = Inputs {
         x: Expr::xyz().to_vec(),
@@ -172,60 +211,100 @@ pub fn lower(
         value: Expr::constant(0.0),
         error: Expr::constant(0.0),
         errors: table.clone(),
+        attributes: Vec::new(),
         params: names.into_iter().zip(pvals.iter().copied()).collect(),
         lowered: true,
-        interp: None,
+        per_point: None,
+        interp,
     };
     match ex.run(obj, inputs) {
-        Ok(value) => {
+        Ok(out) => {
             let error = prune::error_code(&ex.sites);
+            let mut s = out.s;
+            // A library call may have written more or fewer elements into
+            // `s` than the header declares.
+            s.resize(n_attr, Expr::constant(0.0));
             Ok(Model {
-                value: guard(value, &error),
+                value: guard(out.value, &error),
+                attributes: s.into_iter().map(|a| guard(a, &error)).collect(),
                 error,
                 ..base
             })
         }
         Err(Stop::Static(message, pos)) => Err(LowerError { message, pos }),
-        Err(Stop::NeedsPoint) => {
-            let interp = Arc::new(fallback::Interp {
-                program: program.clone(),
-                object,
-                registry: registry.clone(),
-                table,
-                params: pvals,
-                runaway: std::sync::OnceLock::new(),
-            });
-            let field = |error| {
-                Expr::field(Arc::new(fallback::Output {
-                    interp: interp.clone(),
-                    error,
-                }))
-            };
-            Ok(Model {
-                value: field(false),
-                error: field(true),
-                lowered: false,
-                interp: Some(interp),
-                ..base
-            })
+        Err(Stop::NeedsPoint(why)) => {
+            let interp = base.interp.clone();
+            Ok(base.on(interp, why))
         }
     }
 }
 
 /// The value where no run-time error is raised, NaN where one is: every
 /// consumer (mesher, slicer, renderer) treats NaN as outside, so a point
-/// with an error is never part of the solid. Folds away when `error` is the
-/// constant 0.
+/// with an error is never part of the solid. Attributes get the same
+/// guard: a point whose evaluation fails has no material either. Folds
+/// away when `error` is the constant 0.
 fn guard(value: Expr, error: &Expr) -> Expr {
     Expr::select(error.clone(), Expr::constant(f64::NAN), value)
 }
 
 impl Model {
     /// The model as a core [`Shape`]: the value, with the error code as its
-    /// error channel (decoded by this model's error table).
+    /// error channel (decoded by this model's error table) and the
+    /// attributes as channels `s1`, `s2`, ... ([`Model::attribute_names`]).
     pub fn shape(&self) -> Shape {
-        Shape::new(self.value.clone())
-            .with_errors(self.error.clone(), Arc::new(self.errors.clone()))
+        let mut shape = Shape::new(self.value.clone())
+            .with_errors(self.error.clone(), Arc::new(self.errors.clone()));
+        for (name, a) in self.attribute_names().iter().zip(&self.attributes) {
+            shape = shape.with_attribute(name, a.clone());
+        }
+        shape
+    }
+
+    /// Channel names of the attributes: `s1` for `s[1]`, and so on.
+    pub fn attribute_names(&self) -> Vec<String> {
+        (1..=self.attributes.len())
+            .map(|k| format!("s{k}"))
+            .collect()
+    }
+
+    /// The same model on the per-point interpreter (what a model that
+    /// cannot be lowered runs on): same values, error codes and
+    /// attributes, no interval bounds, far slower. For checking the
+    /// lowering against the interpreter; parameters are fixed at their
+    /// values in [`Model::params`].
+    pub fn interpreted(&self) -> Model {
+        let old = &self.interp;
+        let params: Vec<f64> = self.params.iter().map(|p| p.1).collect();
+        let interp = Arc::new(fallback::Interp::new(
+            old.program.clone(),
+            old.object,
+            old.registry.clone(),
+            self.errors.clone(),
+            params,
+            old.attributes,
+        ));
+        let why = self.per_point.clone().unwrap_or(PerPoint {
+            message: "the per-point interpreter was asked for".into(),
+            pos: Pos::default(),
+        });
+        self.on(interp, why)
+    }
+
+    /// This model with its outputs taken from `interp`.
+    fn on(&self, interp: Arc<fallback::Interp>, why: PerPoint) -> Model {
+        let field = |c| Output::expr(&interp, c);
+        Model {
+            value: field(Channel::Value),
+            error: field(Channel::Error),
+            attributes: (0..interp.attributes)
+                .map(|k| field(Channel::Attribute(k)))
+                .collect(),
+            lowered: false,
+            per_point: Some(why),
+            interp: interp.clone(),
+            ..self.clone()
+        }
     }
 
     /// The loop that ran out of iterations, once any evaluation of a
@@ -235,7 +314,10 @@ impl Model {
     /// afterwards and fail with the error: the model is broken, and which
     /// points got values first depends on the evaluation order.
     pub fn runaway_loop(&self) -> Option<RuntimeError> {
-        let code = *self.interp.as_ref()?.runaway.get()?;
+        if self.lowered {
+            return None;
+        }
+        let code = *self.interp.runaway.get()?;
         self.errors.get(code)
     }
 
@@ -246,8 +328,30 @@ impl Model {
 
     /// Reference (f64) evaluation at points, with the parameters of `params`.
     pub fn eval_points(&self, pts: &[[f64; 3]]) -> Vec<Result<f64, RuntimeError>> {
-        let tape = self.tape();
-        let mut pe = PointEval::new(&tape);
+        self.eval_with(&self.tape(), pts, |out| out[0])
+    }
+
+    /// As [`Model::eval_points`], with the attributes `s[1..=n]` of each
+    /// point after its value.
+    pub fn eval_points_with_attributes(
+        &self,
+        pts: &[[f64; 3]],
+    ) -> Vec<Result<(f64, Vec<f64>), RuntimeError>> {
+        let mut outs = vec![self.value.clone(), self.error.clone()];
+        outs.extend(self.attributes.iter().cloned());
+        let tape = Tape::with_outputs(&outs);
+        self.eval_with(&tape, pts, |out| (out[0], out[2..].to_vec()))
+    }
+
+    /// Evaluates `tape` (outputs value, error code, ...) at `pts` with the
+    /// model's parameters; `f` takes what it needs from the outputs.
+    fn eval_with<T>(
+        &self,
+        tape: &Tape,
+        pts: &[[f64; 3]],
+        f: impl Fn(&[f64]) -> T,
+    ) -> Vec<Result<T, RuntimeError>> {
+        let mut pe = PointEval::new(tape);
         for (name, v) in &self.params {
             if let Some(i) = tape.param_index(name) {
                 pe.set_param(i, *v);
@@ -256,7 +360,7 @@ impl Model {
         pts.iter()
             .map(|&p| {
                 let out = pe.eval_all(p);
-                self.result(out[0], out[1])
+                self.result(out[0], out[1]).map(|_| f(&out))
             })
             .collect()
     }
