@@ -52,8 +52,19 @@ impl Interval {
     pub fn point(v: f64) -> Interval {
         Interval::new(v, v)
     }
+    /// The "nothing known" bound (consumers treat it as the whole line).
     pub fn nan() -> Interval {
         Interval::new(f64::NAN, f64::NAN)
+    }
+    /// The bound of a value that is NaN everywhere (the constant NaN, e.g.
+    /// where a model raises a run-time error): no finite range, only the
+    /// NaN flag, so `select(error, NaN, value)` keeps the value's range.
+    pub fn only_nan() -> Interval {
+        Interval {
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+            nan: true,
+        }
     }
     /// Whether a point value covered by this bound may be NaN (also true
     /// for the "nothing known" NaN bound).

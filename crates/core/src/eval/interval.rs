@@ -61,6 +61,7 @@ impl IntervalEval {
         for (i, op) in self.tape.ops().iter().enumerate() {
             s[i] = match *op {
                 Op::Var(a) => p[a as usize],
+                Op::Const(c) if c.is_nan() => Interval::only_nan(),
                 Op::Const(c) => Interval::point(c),
                 Op::Param(k) => self.params[k as usize],
                 Op::Unary(op, a) => s[a as usize].unary(op),

@@ -91,10 +91,11 @@ impl Shape {
     /// be NaN where the code is not 0 (HyperFun lowering does this).
     pub fn with_errors(self, code: Expr, source: Arc<dyn ErrorSource>) -> Shape {
         let error = (code.as_const() != Some(0.0)).then_some(ErrorChannel { expr: code, source });
-        let bounds = self.bounds.clone();
+        // The value is unchanged: its tape and bounds carry over.
         Shape {
-            bounds,
-            ..Shape::assemble(self.value, error, self.attributes)
+            error,
+            all: Arc::new(OnceLock::new()),
+            ..self
         }
     }
 
@@ -105,10 +106,10 @@ impl Shape {
             name: name.to_string(),
             expr,
         });
-        let bounds = self.bounds.clone();
         Shape {
-            bounds,
-            ..Shape::assemble(self.value, self.error, attributes)
+            attributes,
+            all: Arc::new(OnceLock::new()),
+            ..self
         }
     }
 
