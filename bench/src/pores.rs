@@ -7,11 +7,12 @@
 //! size. Peak resident memory (VmHWM) is reset before each stage where the
 //! kernel allows it. 2 threads throughout.
 
-use microfrep_core::{prims, Expr, Shape};
+use microfrep_core::{Expr, Shape};
 use microfrep_fab::{rasterize_at, SliceGrid};
 use microfrep_mesh::check::check;
 use microfrep_mesh::{MeshOptions, Plan};
 use microfrep_pores::{Built, Options, Pores, Spec};
+use microfrep_shapes as prims;
 use microfrep_structures::tpms::{tpms, Solid, Tpms};
 use std::sync::Arc;
 use std::time::Instant;

@@ -4,7 +4,8 @@
 //!
 //! ```
 //! use microfrep_analysis::{analyze, AnalyzeOptions, Grid};
-//! use microfrep_core::{prims, Expr, Shape};
+//! use microfrep_core::{Expr, Shape};
+//! use microfrep_shapes as prims;
 //! let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
 //! let grid = Grid::new([[-1.0; 3], [1.0; 3]], 64).unwrap();
 //! let opts = AnalyzeOptions { thickness: false, ..AnalyzeOptions::default() };

@@ -5,15 +5,42 @@
 //! on their tetrahedra's edges, with the polygons' bulges; and the error
 //! estimate of a measure.
 
-use crate::area::{iso_polygon, iso_polygon_cut, IsoPolygon};
+use crate::area::{iso_polygon_cut, IsoPolygon};
 use crate::crease::{roots, Seg};
 use crate::measure::{Ctx, TETS};
 use microfrep_core::geom::{cross, dot};
 
-/// Fraction of the tetrahedron's volume where the linear interpolant of the
-/// vertex values `f` is `>= 0` (see [`crate::area::IsoPolygon::inside_fraction`]).
-pub fn tet_fraction(f: [f64; 4]) -> f64 {
-    iso_polygon(f).inside_fraction()
+/// Fraction of a tetrahedron where the linear interpolant of the vertex
+/// values `u` is `>= 0`. With the vertices sorted into `p_i >= 0 > n_j`,
+/// the closed forms have only positive terms (no cancellation):
+/// one vertex in, `p^3 / prod (p - n_j)`; two in, the polynomial below over
+/// `prod (p_i - n_j)`; three in, one minus the one-vertex form of `-u`.
+pub fn tet_fraction(u: [f64; 4]) -> f64 {
+    let (mut pos, mut neg) = ([0.0; 4], [0.0; 4]);
+    let (mut np, mut nn) = (0, 0);
+    for v in u {
+        if v >= 0.0 {
+            pos[np] = v;
+            np += 1;
+        } else {
+            neg[nn] = v;
+            nn += 1;
+        }
+    }
+    let corner = |a: f64, o: [f64; 3]| a * a * a / ((a - o[0]) * (a - o[1]) * (a - o[2]));
+    match np {
+        0 => 0.0,
+        1 => corner(pos[0], [neg[0], neg[1], neg[2]]),
+        2 => {
+            let (p, q, r, s) = (pos[0], pos[1], -neg[0], -neg[1]);
+            // With r, s >= 0 standing for the negated negative values.
+            let num =
+                p * p * q * q + (p * p * q + p * q * q) * (r + s) + (p * p + p * q + q * q) * r * s;
+            num / ((p + r) * (p + s) * (q + r) * (q + s))
+        }
+        3 => 1.0 - corner(-neg[0], [-pos[0], -pos[1], -pos[2]]),
+        _ => 1.0,
+    }
 }
 
 /// Statistic of one measure: the value at the grid's resolution, the value

@@ -4,8 +4,8 @@
 use microfrep_analysis::connectivity::{connectivity, Connectivity};
 use microfrep_analysis::{Grid, Sampler};
 use microfrep_core::frep::{subtraction, union};
-use microfrep_core::prims::{sphere, torus, v3};
 use microfrep_core::{Expr, Shape};
+use microfrep_shapes::{sphere, torus, v3};
 use microfrep_structures::lattice::{rod_lattice, Slabs};
 
 fn run(e: &Expr, region: Option<&Expr>, bounds: [[f64; 3]; 2], n: usize) -> Connectivity {
@@ -89,7 +89,7 @@ fn cavity_inside_a_region_counts_as_closed_and_region_edge_as_open() {
     let p = Expr::xyz();
     let region = sphere(&p, &v3([0.0; 3]), 1.0);
     let cavity = sphere(&p, &v3([0.0; 3]), 0.3);
-    let channel = microfrep_core::prims::cylinder(&p, &v3([0.0; 3]), 0, 0.15);
+    let channel = microfrep_shapes::cylinder(&p, &v3([0.0; 3]), 0, 0.15);
     let tunnel = microfrep_core::frep::intersection(&channel, &(&p[0] - 0.5), 1.0);
     let solid = subtraction(&subtraction(&region, &cavity, 1.0), &tunnel, 1.0);
     let c = run(&solid, Some(&region), BOX, 64);

@@ -2,8 +2,8 @@
 
 use microfrep_analysis::grid::MAX_RESOLUTION;
 use microfrep_analysis::{analyze, AnalysisError, AnalyzeOptions, Grid};
-use microfrep_core::prims::{sphere, v3};
 use microfrep_core::{Expr, Shape};
+use microfrep_shapes::{sphere, v3};
 
 const B: [[f64; 3]; 2] = [[-1.0; 3], [1.0; 3]];
 

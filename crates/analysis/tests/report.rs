@@ -4,8 +4,8 @@
 use microfrep_analysis::thickness::PhaseThickness;
 use microfrep_analysis::{analyze, AnalyzeOptions, Grid};
 use microfrep_core::frep::subtraction;
-use microfrep_core::prims::{sphere, v3};
 use microfrep_core::{Expr, Shape};
+use microfrep_shapes::{sphere, v3};
 use std::f64::consts::PI;
 
 #[test]

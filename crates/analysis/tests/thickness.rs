@@ -10,8 +10,8 @@ use microfrep_analysis::thickness::{
     ThicknessOptions,
 };
 use microfrep_analysis::AnalysisError;
-use microfrep_core::prims::{cylinder, v3};
 use microfrep_core::{Expr, Shape};
+use microfrep_shapes::{cylinder, v3};
 use microfrep_structures::lattice::{rod_lattice, Slabs};
 
 /// Small deterministic generator (xorshift64*).

@@ -6,8 +6,8 @@
 mod common;
 use common::{close, measures};
 use microfrep_core::frep::intersection;
-use microfrep_core::prims::{block, sphere, torus, v3};
 use microfrep_core::Expr;
+use microfrep_shapes::{block, sphere, torus, v3};
 use microfrep_structures::lattice::{rod_lattice, rod_lattice_volume_fraction, Slabs};
 use microfrep_structures::tpms::{tpms, Solid, Tpms};
 use std::f64::consts::PI;

@@ -2,10 +2,10 @@
 //! tape and evaluated in four modes.
 //!
 //! ```
-//! use microfrep_core::{Expr, Tape, PointEval, prims, frep};
-//! let p = Expr::xyz();
-//! let ball = prims::sphere(&p, &prims::v3([0.0; 3]), 1.0);
-//! let cut = prims::half_space(&p, [0.0; 3], [0.0, 0.0, 1.0]);
+//! use microfrep_core::{Expr, Tape, PointEval, frep};
+//! let [x, y, z] = Expr::xyz();
+//! let ball = 1.0 - (x.square() + y.square() + z.square());
+//! let cut = -z.clone();
 //! let half_ball = frep::intersection(&ball, &cut, 1.0);
 //! let tape = Tape::new(&half_ball);
 //! assert_eq!(PointEval::new(&tape).eval([0.0, 0.0, -0.5]), 0.5);
@@ -23,7 +23,6 @@ pub mod graph;
 pub mod interval;
 pub mod noise;
 pub mod ops;
-pub mod prims;
 pub mod shape;
 pub mod simd_math;
 mod symbolic;

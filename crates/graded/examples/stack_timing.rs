@@ -10,13 +10,14 @@
 //! `TIMING_ORDERED=1` the material stacks use ordered dithering instead of
 //! error diffusion.
 
-use microfrep_core::{prims, BatchEval, Expr, Tape};
+use microfrep_core::{BatchEval, Expr, Tape};
 use microfrep_fab::grid::SliceGrid;
 use microfrep_fab::stack::{write_stack, Format};
 use microfrep_graded::depth::Reference;
 use microfrep_graded::dmf;
 use microfrep_graded::stack::{write_material_stack, MaterialStack, Palette, StackGrid};
 use microfrep_graded::subspace::{MaterialModel, Subspace};
+use microfrep_shapes as prims;
 use rayon::prelude::*;
 use std::time::Instant;
 

@@ -28,7 +28,8 @@
 //! material stack:
 //!
 //! ```
-//! use microfrep_core::{BatchEval, Expr, Tape, prims};
+//! use microfrep_core::{BatchEval, Expr, Tape};
+//! use microfrep_shapes as prims;
 //! use microfrep_graded::{dmf, subspace::{MaterialModel, Subspace}};
 //! use microfrep_graded::stack::{write_material_stack, MaterialStack, Palette, StackGrid};
 //! let p = Expr::xyz();

@@ -21,7 +21,8 @@
 //! [`Expr`], ready to be a channel of a shape or an output of a tape.
 //!
 //! ```
-//! use microfrep_core::{Expr, PointEval, Tape, prims};
+//! use microfrep_core::{Expr, PointEval, Tape};
+//! use microfrep_shapes as prims;
 //! use microfrep_graded::subspace::{MaterialModel, Subspace};
 //! use microfrep_graded::dmf::bias;
 //! let p = Expr::xyz();

@@ -15,7 +15,8 @@
 //! the model and the options.
 //!
 //! ```
-//! use microfrep_core::{prims, Expr, Shape};
+//! use microfrep_core::{Expr, Shape};
+//! use microfrep_shapes as prims;
 //! use microfrep_mesh::{check::check, MeshOptions, Plan};
 //! let ball = Shape::new(prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0));
 //! let opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], 16);

@@ -2,10 +2,11 @@
 //! with marching tetrahedra (`tests/cubes.rs` holds the same for the
 //! default, marching cubes).
 
+use microfrep_core::Expr;
 use microfrep_core::Shape;
-use microfrep_core::{prims, Expr};
 use microfrep_mesh::check::{check, CheckReport};
 use microfrep_mesh::{CellMethod, Mesh, MeshOptions, Plan};
+use microfrep_shapes as prims;
 use microfrep_structures::examples::toriball;
 use microfrep_structures::lattice::{
     rod_lattice, rod_lattice_area_in_unit_cube, rod_lattice_volume_fraction, Slabs,

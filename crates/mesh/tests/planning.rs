@@ -1,8 +1,9 @@
 //! Bounds from interval analysis, memory prediction and input errors.
 
+use microfrep_core::Expr;
 use microfrep_core::Shape;
-use microfrep_core::{prims, Expr};
 use microfrep_mesh::{memory, MeshError, MeshOptions, Plan};
+use microfrep_shapes as prims;
 use microfrep_structures::examples::{shell_lattice, toriball};
 
 fn ball() -> Expr {

@@ -197,8 +197,9 @@ fn intervals_bound_values_and_decide_clear_boxes() {
 /// Meshes written by microfrep's own mesher: a sphere and a lattice part.
 #[test]
 fn microfrep_meshes_of_a_sphere_and_a_lattice_part() {
-    use microfrep_core::{frep, prims, Expr};
+    use microfrep_core::{frep, Expr};
     use microfrep_mesh::{MeshOptions, Plan};
+    use microfrep_shapes as prims;
     let ball = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
     let opts = MeshOptions::new([[-1.1; 3], [1.1; 3]], 24);
     let mesh = from_microfrep(

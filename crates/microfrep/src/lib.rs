@@ -10,6 +10,7 @@
 //! | module | crate | concern |
 //! | --- | --- | --- |
 //! | [`core`] | `microfrep-core` | expression graph, tape, evaluators, [`Shape`] |
+//! | [`shapes`] | `microfrep-shapes` | primitives with HyperFun's exact formulas |
 //! | [`hyperfun`] | `microfrep-hyperfun` | the HyperFun language |
 //! | [`structures`] | `microfrep-structures` | lattices, TPMS, struts, porous media, replication |
 //! | [`pores`] | `microfrep-pores` | irregular pores by subdivision (Kou and Tan) |
@@ -49,6 +50,7 @@ pub use microfrep_meshfield as meshfield;
 pub use microfrep_pores as pores;
 pub use microfrep_render as render;
 pub use microfrep_scan as scan;
+pub use microfrep_shapes as shapes;
 pub use microfrep_structures as structures;
 
 /// Adds microfrep's HyperFun library (the `mf*` microstructure, graded and

@@ -25,7 +25,8 @@
 //!   field.
 //!
 //! ```
-//! use microfrep_core::{prims, Expr, PointEval, Tape};
+//! use microfrep_core::{Expr, PointEval, Tape};
+//! use microfrep_shapes as prims;
 //! use microfrep_pores::{Options, Pores, Spec};
 //! let part = prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 1.0);
 //! let built = Pores::build(

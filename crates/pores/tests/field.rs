@@ -1,8 +1,9 @@
 //! The pore structure as a Field: all four modes, determinism, and errors.
 
 use microfrep_core::field_check::{check_field, FieldCheck};
-use microfrep_core::{prims, Expr, Field};
+use microfrep_core::{Expr, Field};
 use microfrep_pores::{Dim, Options, PoreError, Pores, Spec, Subdivision};
+use microfrep_shapes as prims;
 use std::sync::Arc;
 
 fn ball() -> Expr {

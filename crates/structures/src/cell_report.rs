@@ -106,7 +106,7 @@ pub fn cell_report(
         max_symmetry_diff: 0.0,
     }; 3];
     for (axis, rep) in axes.iter_mut().enumerate() {
-        let (u, v) = microfrep_core::prims::others(axis);
+        let (u, v) = microfrep_shapes::others(axis);
         for a in 0..n {
             for b in 0..n {
                 let mut p = [0.0; 3];

@@ -4,8 +4,8 @@ use crate::infill::{shell_with_infill, Join};
 use crate::lattice::{rod_lattice, Slabs};
 use crate::replicate::{replicate, Wave};
 use microfrep_core::frep::{intersection, union_all};
-use microfrep_core::prims::{block, sphere, torus, v3};
 use microfrep_core::Expr;
+use microfrep_shapes::{block, sphere, torus, v3};
 
 /// A named example with its natural bounding box.
 pub struct Example {

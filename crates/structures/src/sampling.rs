@@ -15,8 +15,8 @@ use rayon::prelude::*;
 
 mod cells;
 mod levels;
-pub use cells::tet_fraction;
 pub use levels::{LevelField, MAX_CELLS};
+pub use microfrep_analysis::volume::tet_fraction;
 
 /// Largest accepted number of sample points (memory: 12 bytes a point).
 pub const MAX_POINTS: usize = 1 << 24;

@@ -2,8 +2,8 @@
 //! matches point (f64), and interval bounds enclose sampled values.
 mod common;
 use common::*;
-use microfrep_core::prims::{sphere, v3};
 use microfrep_core::{Expr, PointEval, Tape};
+use microfrep_shapes::{sphere, v3};
 use microfrep_structures::examples::{shell_lattice, toriball, unit_sphere};
 use microfrep_structures::infill::Depth;
 use microfrep_structures::porous::{pores, porous, PeriodicMap};

@@ -1,8 +1,8 @@
 mod common;
 use common::*;
 use microfrep_core::noise::{gradient_noise, noise_g, NOISE_BOUND};
-use microfrep_core::prims::{ellipsoid, sphere, v3};
 use microfrep_core::Expr;
+use microfrep_shapes::{ellipsoid, sphere, v3};
 use microfrep_structures::examples::unit_sphere;
 use microfrep_structures::infill::{graded_by_depth, Depth};
 use microfrep_structures::porous::*;

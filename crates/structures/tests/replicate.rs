@@ -1,8 +1,8 @@
 mod common;
 use common::*;
 use microfrep_core::frep::union_all;
-use microfrep_core::prims::{cylinder, sphere, v3};
 use microfrep_core::{Axis, Expr};
+use microfrep_shapes::{cylinder, sphere, v3};
 use microfrep_structures::cell_report::cell_report;
 use microfrep_structures::examples::toriball_cell;
 use microfrep_structures::replicate::*;

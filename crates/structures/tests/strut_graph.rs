@@ -4,7 +4,8 @@
 mod common;
 use common::*;
 use microfrep_core::field_check::{check_field, FieldCheck};
-use microfrep_core::{prims, Expr, Field};
+use microfrep_core::{Expr, Field};
+use microfrep_shapes as prims;
 use microfrep_structures::strut_graph::StrutGraph;
 use microfrep_structures::struts::*;
 use std::sync::Arc;

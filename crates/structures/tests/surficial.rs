@@ -1,7 +1,7 @@
 mod common;
 use common::*;
-use microfrep_core::prims::half_space;
 use microfrep_core::Expr;
+use microfrep_shapes::half_space;
 use microfrep_structures::examples::unit_sphere;
 use microfrep_structures::infill::Depth;
 use microfrep_structures::lattice::{rod_lattice, Slabs};

@@ -1,8 +1,8 @@
 mod common;
 use common::*;
 use microfrep_core::frep::subtraction;
-use microfrep_core::prims::{half_space, sphere, v3};
 use microfrep_core::Expr;
+use microfrep_shapes::{half_space, sphere, v3};
 use microfrep_structures::examples::{toriball_cell, unit_sphere};
 use microfrep_structures::infill::{graded_by_depth, Depth};
 use microfrep_structures::replicate::*;

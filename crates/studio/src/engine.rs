@@ -578,7 +578,8 @@ const MIB: f64 = 1024.0 * 1024.0;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use microfrep_core::{prims, Expr};
+    use microfrep_core::Expr;
+    use microfrep_shapes as prims;
 
     #[test]
     fn attribute_channels_are_evaluated_at_the_vertices() {

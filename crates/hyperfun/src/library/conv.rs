@@ -34,7 +34,7 @@ fn conv_point(a: &[Arg]) -> Output {
 
 /// Kernel integral over the segment `b -> e` with width `s` (the core's).
 fn segment(p: &V3, b: &V3, e: &V3, s: &Expr) -> Expr {
-    microfrep_core::prims::line_term(p, b, e, s)
+    microfrep_shapes::line_term(p, b, e, s)
 }
 
 fn conv_line(a: &[Arg]) -> Output {
@@ -86,7 +86,7 @@ fn conv_line_r(a: &[Arg]) -> Output {
 /// Kernel integral over one triangle (the core's, which relabels the
 /// vertices so that the first edge is the longest, as the reference does).
 fn triangle(p: &V3, v: [V3; 3], s: &Expr) -> Expr {
-    microfrep_core::prims::triangle_term(p, [&v[0], &v[1], &v[2]], s)
+    microfrep_shapes::triangle_term(p, [&v[0], &v[1], &v[2]], s)
 }
 
 fn conv_triangle(a: &[Arg]) -> Output {

@@ -11,10 +11,10 @@ use microfrep_core::Expr;
 #[allow(clippy::approx_constant)]
 const PI: f64 = 3.141592;
 
-/// The arc kernel integral of the core (`microfrep_core::prims::arc_term`)
+/// The arc kernel integral of the core (`microfrep_shapes::arc_term`)
 /// with the argument order used here.
 fn arc(x: &Expr, y: &Expr, z: &Expr, r: &Expr, th: &Expr, s: &Expr) -> Expr {
-    microfrep_core::prims::arc_term(&[x.clone(), y.clone(), z.clone()], r, s, th)
+    microfrep_shapes::arc_term(&[x.clone(), y.clone(), z.clone()], r, s, th)
 }
 
 fn conv_arc(a: &[Arg]) -> Output {

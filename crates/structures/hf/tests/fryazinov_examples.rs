@@ -3,10 +3,10 @@
 mod common;
 use common::*;
 use microfrep_core::frep::{normalize, union_all};
-use microfrep_core::prims::{torus, v3};
 use microfrep_core::Expr;
 use microfrep_mesh::check::check;
 use microfrep_mesh::{MeshOptions, Plan};
+use microfrep_shapes::{torus, v3};
 use microfrep_structures::cell_report::cell_report;
 use microfrep_structures::examples::toriball;
 use microfrep_structures::replicate::{replicate, Wave};

@@ -1,6 +1,7 @@
 //! The cells of a node grid (or of its every-other-node coarsening) and the
 //! sublevel volume of the linear interpolant on their Kuhn tetrahedra.
 
+use microfrep_analysis::volume::tet_fraction;
 use microfrep_core::geom::KUHN_TETS as TETS;
 use rayon::prelude::*;
 
@@ -139,38 +140,5 @@ impl Active {
             })
             .collect();
         (self.full + sums.iter().sum::<f64>()) / (lv.m * lv.m * lv.m) as f64
-    }
-}
-
-/// Fraction of a tetrahedron where the linear interpolant of the vertex
-/// values `u` is `>= 0`. With the vertices sorted into `p_i >= 0 > n_j`,
-/// the closed forms have only positive terms (no cancellation):
-/// one vertex in, `p^3 / prod (p - n_j)`; two in, the polynomial below over
-/// `prod (p_i - n_j)`; three in, one minus the one-vertex form of `-u`.
-pub fn tet_fraction(u: [f64; 4]) -> f64 {
-    let (mut pos, mut neg) = ([0.0; 4], [0.0; 4]);
-    let (mut np, mut nn) = (0, 0);
-    for v in u {
-        if v >= 0.0 {
-            pos[np] = v;
-            np += 1;
-        } else {
-            neg[nn] = v;
-            nn += 1;
-        }
-    }
-    let corner = |a: f64, o: [f64; 3]| a * a * a / ((a - o[0]) * (a - o[1]) * (a - o[2]));
-    match np {
-        0 => 0.0,
-        1 => corner(pos[0], [neg[0], neg[1], neg[2]]),
-        2 => {
-            let (p, q, r, s) = (pos[0], pos[1], -neg[0], -neg[1]);
-            // With r, s >= 0 standing for the negated negative values.
-            let num =
-                p * p * q * q + (p * p * q + p * q * q) * (r + s) + (p * p + p * q + q * q) * r * s;
-            num / ((p + r) * (p + s) * (q + r) * (q + s))
-        }
-        3 => 1.0 - corner(-neg[0], [-pos[0], -pos[1], -pos[2]]),
-        _ => 1.0,
     }
 }

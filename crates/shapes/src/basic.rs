@@ -1,8 +1,8 @@
 //! Algebraic primitives (`LIBRARY.md` section 1) and half-spaces.
 
-use super::{norm2, others, sub};
-use crate::expr::Expr;
-use crate::transform::P3;
+use crate::{norm2, others, sub};
+use microfrep_core::transform::P3;
+use microfrep_core::Expr;
 
 /// `R^2 - |p - c|^2` (hfSphere).
 pub fn sphere(p: &P3, c: &P3, r: impl Into<Expr>) -> Expr {
@@ -61,7 +61,7 @@ pub fn block(p: &P3, v: &P3, w: &P3) -> Expr {
     let s: Vec<Expr> = (0..3)
         .map(|i| (&p[i] - &v[i]) * (&v[i] + &w[i] - &p[i]))
         .collect();
-    let r0 = |a: &Expr, b: &Expr| Expr::set(crate::SetOp::Intersection, a, b, 0.0);
+    let r0 = |a: &Expr, b: &Expr| Expr::set(microfrep_core::SetOp::Intersection, a, b, 0.0);
     r0(&r0(&s[0], &s[1]), &s[2])
 }
 

@@ -1,9 +1,9 @@
 //! hfConvArc: circular arcs under the Cauchy kernel, with the quirks of the
 //! HyperFun code that change values.
 
-use super::{need, sub, PrimError, HF_EPS};
-use crate::expr::Expr;
-use crate::transform::P3;
+use crate::{need, sub, PrimError, HF_EPS};
+use microfrep_core::transform::P3;
+use microfrep_core::Expr;
 
 /// HyperFun's value of pi in this file (`#define PI 3.141592`); kept, as it
 /// changes values.

@@ -6,6 +6,12 @@
 //! HyperFun front end; each function names the `hf*` call it implements.
 //! List arguments are slices of triples (`[Expr; 3]`) or of scalars; a list
 //! too short for the primitive count gives a [`PrimError`].
+//!
+//! ```
+//! use microfrep_core::{Expr, PointEval, Tape};
+//! let ball = microfrep_shapes::sphere(&Expr::xyz(), &microfrep_shapes::v3([0.0; 3]), 1.0);
+//! assert_eq!(PointEval::new(&Tape::new(&ball)).eval([0.0, 0.0, 0.5]), 0.75);
+//! ```
 
 mod basic;
 mod blobs;
@@ -21,8 +27,8 @@ pub use conv_arc::*;
 pub use dellipsoid::*;
 pub use distance::*;
 
-use crate::expr::Expr;
-use crate::transform::P3;
+use microfrep_core::transform::P3;
+use microfrep_core::Expr;
 
 /// HyperFun's `EPS`, used by several primitives' guards.
 pub const HF_EPS: f64 = 1e-6;

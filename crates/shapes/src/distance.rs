@@ -1,9 +1,9 @@
 //! Distance primitives, positive inside (`LIBRARY.md` section 5), except the
 //! ellipsoid, which is an iteration (see `dellipsoid.rs`).
 
-use super::{norm2, others, sub};
-use crate::expr::Expr;
-use crate::transform::P3;
+use crate::{norm2, others, sub};
+use microfrep_core::transform::P3;
+use microfrep_core::Expr;
 
 /// Double cone along `axis` with apex `c` and slope `R` (radius per unit
 /// length): `-(rho cos t - |d_axis| sin t)`, `t = atan(R)` (hfDConeX/Y/Z).

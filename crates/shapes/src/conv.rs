@@ -3,9 +3,9 @@
 //! primitive count is the length of the kernel-width list `s`, except for
 //! hfConvLineR, which counts segment ends.
 
-use super::{dot, need, norm2, sub, PrimError};
-use crate::expr::Expr;
-use crate::transform::P3;
+use crate::{dot, need, norm2, sub, PrimError};
+use microfrep_core::transform::P3;
+use microfrep_core::Expr;
 
 /// `sum_n 1/(1 + S_n^2 |p - q_n|^2)^2 - T` (hfConvPoint).
 pub fn conv_point(

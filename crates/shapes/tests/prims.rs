@@ -8,8 +8,8 @@
 // primitive arguments at once.
 #![allow(clippy::excessive_precision, clippy::needless_range_loop)]
 
-use microfrep_core::prims::{self, v3, PrimError};
 use microfrep_core::{BatchEval, Expr, GradEval, Interval, IntervalEval, PointEval, Tape};
+use microfrep_shapes::{self as prims, v3, PrimError};
 
 type P = [f64; 3];
 

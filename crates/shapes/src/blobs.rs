@@ -1,9 +1,9 @@
 //! Sums of radial terms over a list of centres: hfBlobby, hfMetaball, hfSoft.
 //! The term count is the number of centres, as HyperFun takes it from `x0`.
 
-use super::{need, norm2, sub, PrimError};
-use crate::expr::Expr;
-use crate::transform::P3;
+use crate::{need, norm2, sub, PrimError};
+use microfrep_core::transform::P3;
+use microfrep_core::Expr;
 
 /// `sum_i b_i exp(-a_i r_i^2) - T` with `r_i = |p - centre_i|` (hfBlobby).
 pub fn blobby(
