@@ -8,6 +8,7 @@ mod hyperfun;
 mod mesh;
 mod parts;
 mod pores;
+mod simplify;
 mod slice;
 mod structures;
 mod studio;
@@ -53,6 +54,10 @@ const SUITES: &[(&str, &str)] = &[
         "microfrep serve: edit to first preview mesh and to refined mesh, three examples",
     ),
     (
+        "simplify",
+        "per-region tape simplification vs the full tape: meshing and slicing three part-with-lattice models",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -74,6 +79,7 @@ fn main() {
         "mesh" => mesh::run(),
         "parts" => parts::run(),
         "pores" => pores::run(),
+        "simplify" => simplify::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),

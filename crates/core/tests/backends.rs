@@ -5,8 +5,8 @@
 mod backend;
 
 use microfrep_core::{
-    BatchEvaluator, Function, GradBatchEvaluator, GradEval, GradEvaluator, IntervalEval,
-    PointEval, PointEvaluator, Tape,
+    BatchEvaluator, Function, GradBatchEvaluator, GradEval, GradEvaluator, IntervalEval, PointEval,
+    PointEvaluator, Tape,
 };
 
 /// A second backend: everything by the f64 point path, batches one point

@@ -16,5 +16,5 @@ pub mod voxels;
 
 pub use error::{FabError, Result};
 pub use grid::SliceGrid;
-pub use raster::{rasterize, rasterize_at, LayerValues};
+pub use raster::{rasterize, rasterize_at, rasterize_with, LayerValues};
 pub use stack::{layer_polygons, write_stack, Format};

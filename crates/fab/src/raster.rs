@@ -3,7 +3,7 @@
 //! sampled, 256 pixels per batch.
 
 use crate::grid::SliceGrid;
-use microfrep_core::{BatchEval, Interval, IntervalEval, Shape};
+use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape};
 use rayon::prelude::*;
 
 /// Side of the tiles that rows of work are cut into.
@@ -33,9 +33,30 @@ impl LayerValues {
 
 /// Per-thread evaluators.
 struct Evals {
+    tape: Tape,
     batch: BatchEval,
     interval: IntervalEval,
+    /// Whether tiles may switch to a tape shortened for their area.
+    simplify: bool,
 }
+
+impl Evals {
+    fn new(tape: &Tape, simplify: bool) -> Evals {
+        Evals {
+            tape: tape.clone(),
+            batch: BatchEval::new(tape),
+            interval: IntervalEval::new(tape),
+            simplify,
+        }
+    }
+}
+
+/// Whether [`rasterize_at`] shortens the tape per tile (see
+/// [`rasterize_with`]); measured by `bench/run slice`.
+pub const SIMPLIFY_TILES: bool = true;
+
+/// Tiles at least this many pixels on a side may get their own tape.
+const SIMPLIFY_TILE: usize = 64;
 
 /// Samples layer `k` of `grid`, tile rows in parallel.
 pub fn rasterize(shape: &Shape, grid: &SliceGrid, k: usize) -> LayerValues {
@@ -44,13 +65,18 @@ pub fn rasterize(shape: &Shape, grid: &SliceGrid, k: usize) -> LayerValues {
 
 /// Samples the grid's image at height `z`.
 pub fn rasterize_at(shape: &Shape, grid: &SliceGrid, z: f64) -> LayerValues {
+    rasterize_with(shape, grid, z, SIMPLIFY_TILES)
+}
+
+/// [`rasterize_at`], choosing whether tiles of 64 pixels and more whose
+/// interval decides set-operation branches are sampled with the shortened
+/// tape ([`microfrep_core::Simplify::Sign`]: the same inside and outside,
+/// other values near the surface).
+pub fn rasterize_with(shape: &Shape, grid: &SliceGrid, z: f64, simplify: bool) -> LayerValues {
     let (nx, ny) = (grid.nx, grid.ny);
     let mut values = vec![0.0f32; nx * ny];
     values.par_chunks_mut(TILE * nx).enumerate().for_each_init(
-        || Evals {
-            batch: BatchEval::new(shape.tape()),
-            interval: IntervalEval::new(shape.tape()),
-        },
+        || Evals::new(shape.tape(), simplify),
         |ev, (tr, rows)| {
             let j0 = tr * TILE;
             let h = rows.len() / nx;
@@ -102,6 +128,16 @@ fn tile(
             rows[r + at[0]..r + at[0] + size[0]].fill(v);
         }
         return;
+    }
+    if ev.simplify && size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE {
+        let short = ev
+            .tape
+            .simplify(ev.interval.values(), Simplify::Sign)
+            .filter(|t| 10 * t.len() < 8 * ev.tape.len());
+        if let Some(t) = short {
+            let mut local = Evals::new(&t, true);
+            return tile(&mut local, grid, z, rows, at, size, row0);
+        }
     }
     if size[0] > LEAF || size[1] > LEAF {
         let hw = size[0].div_ceil(2);

@@ -5,7 +5,7 @@ use crate::classify::{proven_sign, unproven_cells, BrickClass};
 use crate::grid::Grid;
 use crate::refine::{refine_edges, Edge};
 use crate::tets::CellTable;
-use microfrep_core::{BatchEval, IntervalEval, Tape, BLOCK};
+use microfrep_core::{BatchEval, Interval, IntervalEval, Simplify, Tape, BLOCK};
 
 /// The part of the mesh made by one brick. Vertices on grid edges that start
 /// in this brick's half-open node range are owned here; the others are
@@ -26,6 +26,11 @@ pub struct BrickMesh {
 
 /// Per-thread buffers, reused from brick to brick.
 pub struct Scratch {
+    tape: Tape,
+    /// Evaluate each brick with the tape shortened where intervals decide
+    /// set-operation branches (nodes on the brick's faces, which other
+    /// bricks share, with the full tape).
+    simplify: bool,
     batch: BatchEval,
     interval: IntervalEval,
     vals: Vec<f32>,
@@ -43,9 +48,11 @@ pub struct Scratch {
 }
 
 impl Scratch {
-    pub fn new(tape: &Tape, brick: usize) -> Self {
+    pub fn new(tape: &Tape, brick: usize, simplify: bool) -> Self {
         let nodes = (brick + 1).pow(3);
         Scratch {
+            tape: tape.clone(),
+            simplify,
             batch: BatchEval::new(tape),
             interval: IntervalEval::new(tape),
             edges: Vec::new(),
@@ -220,11 +227,25 @@ fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
     };
     let (xs, ys, zs) = (axis(0), axis(1), axis(2));
     let total = n[0] * n[1] * n[2];
+    let mut local = None;
+    if s.simplify {
+        let a = grid.node_pos(lo);
+        let b = grid.node_pos(std::array::from_fn(|k| lo[k] + n[k] - 1));
+        let iv = |k: usize| Interval::new(a[k], b[k]);
+        s.interval.eval(iv(0), iv(1), iv(2));
+        local = s
+            .tape
+            .simplify(s.interval.values(), Simplify::Sign)
+            // Worth it only when much shorter: the faces are evaluated twice.
+            .filter(|t| 10 * t.len() < 7 * s.tape.len())
+            .map(|t| BatchEval::new(&t));
+    }
+    let ev = local.as_mut().unwrap_or(&mut s.batch);
     let (mut i, mut j, mut k) = (0, 0, 0);
     let mut start = 0;
     while start < total {
         let len = BLOCK.min(total - start);
-        let (bx, by, bz) = s.batch.coords_mut();
+        let (bx, by, bz) = ev.coords_mut();
         for q in 0..len {
             bx[q] = xs[i];
             by[q] = ys[j];
@@ -239,12 +260,41 @@ fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
                 }
             }
         }
-        let v = s.batch.eval_loaded(len);
+        let v = ev.eval_loaded(len);
         s.vals[start..start + len].copy_from_slice(v);
         for (d, &f) in s.inside[start..start + len].iter_mut().zip(v) {
             *d = (f >= 0.0) as u8;
         }
         start += len;
+    }
+    if local.is_some() {
+        // Nodes on the faces are shared with the neighbours: there every
+        // brick must see the same value, the full tape's.
+        let (mut px, mut py, mut pz, mut at) = (vec![], vec![], vec![], vec![]);
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let face = i == 0
+                        || j == 0
+                        || k == 0
+                        || i + 1 == n[0]
+                        || j + 1 == n[1]
+                        || k + 1 == n[2];
+                    if face {
+                        px.push(xs[i]);
+                        py.push(ys[j]);
+                        pz.push(zs[k]);
+                        at.push(i + n[0] * (j + n[1] * k));
+                    }
+                }
+            }
+        }
+        let mut out = vec![0.0f32; at.len()];
+        s.batch.eval(&px, &py, &pz, &mut out);
+        for (&q, &f) in at.iter().zip(&out) {
+            s.vals[q] = f;
+            s.inside[q] = (f >= 0.0) as u8;
+        }
     }
 }
 

@@ -92,6 +92,11 @@ pub struct MeshOptions {
     pub brick: usize,
     /// How a cell's surface is made from its corner signs.
     pub cells: CellMethod,
+    /// Evaluate each surface brick with the tape shortened where interval
+    /// arithmetic decides set-operation branches over the brick
+    /// ([`microfrep_core::Simplify`]); the brick's face nodes, shared with
+    /// its neighbours, keep the full tape.
+    pub simplify: bool,
 }
 
 /// Surface extraction inside a cell. Both give closed, oriented 2-manifolds
@@ -129,6 +134,7 @@ impl MeshOptions {
             resolution,
             brick: 32,
             cells: CellMethod::default(),
+            simplify: true,
         }
     }
 }
@@ -141,6 +147,7 @@ pub struct Plan {
     pub grid: Grid,
     classes: Vec<BrickClass>,
     cells: CellMethod,
+    simplify: bool,
     table: &'static tets::CellTable,
     thin_cells: std::sync::atomic::AtomicUsize,
 }
@@ -162,6 +169,7 @@ impl Plan {
             grid,
             classes,
             cells: opts.cells,
+            simplify: opts.simplify,
             table: opts.cells.table(),
             thin_cells: Default::default(),
         })

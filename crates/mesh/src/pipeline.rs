@@ -137,7 +137,7 @@ impl Plan {
         let mut meshes: Vec<BrickMesh> = range
             .into_par_iter()
             .map_init(
-                || Scratch::new(&self.tape, self.grid.brick),
+                || Scratch::new(&self.tape, self.grid.brick, self.simplify),
                 |s, k| {
                     if self.classes[k] != BrickClass::Surface {
                         return BrickMesh::default();

@@ -98,7 +98,8 @@ pub fn interval_case<F: Function>(
 ) -> Result<(), TestCaseError> {
     let e = build(consts, steps);
     let f = F::compile(&Tape::new(&e));
-    let iv: [Interval; 3] = std::array::from_fn(|a| Interval::new(b[a].0 - b[a].1, b[a].0 + b[a].1));
+    let iv: [Interval; 3] =
+        std::array::from_fn(|a| Interval::new(b[a].0 - b[a].1, b[a].0 + b[a].1));
     let r = f.interval().eval_output(0, iv);
     let mut pe = f.point();
     for p in points(b, ts) {
@@ -156,7 +157,14 @@ pub fn batch_case<F: Function>(
         let want = pe.eval_output(0, p.map(f64::from));
         let got = out[i] as f64;
         let tol = 1e-4 * (1.0 + want.abs());
-        prop_assert!((got - want).abs() <= tol, "{} vs {} at {:?} for {:?}", got, want, p, e);
+        prop_assert!(
+            (got - want).abs() <= tol,
+            "{} vs {} at {:?} for {:?}",
+            got,
+            want,
+            p,
+            e
+        );
     }
     Ok(())
 }
@@ -222,7 +230,11 @@ pub fn every_op<F: Function>() {
     let [x, y, z] = Expr::xyz();
     let mut cases: Vec<(String, Expr, Box<dyn Fn(f64, f64, f64) -> f64>)> = Vec::new();
     for op in UnaryOp::ALL {
-        cases.push((op.name().into(), Expr::unary(op, x.clone()), Box::new(move |a, _, _| op.apply(a))));
+        cases.push((
+            op.name().into(),
+            Expr::unary(op, x.clone()),
+            Box::new(move |a, _, _| op.apply(a)),
+        ));
     }
     for op in BinaryOp::ALL {
         cases.push((
@@ -271,9 +283,16 @@ pub fn every_op<F: Function>() {
                         "floor" | "ceil" | "trunc" | "round" | "fract" | "sign" | "saw" | "tri"
                         | "mod" | "rem" | "lt" | "le" | "gt" | "ge" | "eq" | "ne" | "tan" | "pow"));
                 assert!(close, "batch {name}({a}, {b}, {c}): {} vs {want}", out[0]);
-                let r = ie.eval_output(0, [Interval::point(a), Interval::point(b), Interval::point(c)]);
+                let r = ie.eval_output(
+                    0,
+                    [Interval::point(a), Interval::point(b), Interval::point(c)],
+                );
                 assert!(
-                    if want.is_nan() { r.may_be_nan() } else { r.contains(want) },
+                    if want.is_nan() {
+                        r.may_be_nan()
+                    } else {
+                        r.contains(want)
+                    },
                     "interval {name}({a}, {b}, {c}): {r:?} vs {want}"
                 );
             }
