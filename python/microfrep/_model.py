@@ -290,8 +290,8 @@ def lerp(a: Field, b: Field, t: Field) -> Expr:
 class Shape:
     """A model (inside is ``f >= 0``, millimetres). Combine with ``|``
     (union), ``&`` (intersection), ``-`` (subtraction) and ``~``
-    (complement), or :func:`union` and friends for R-function ``alpha`` and
-    blends. Evaluate with :meth:`eval`, mesh with :meth:`mesh`, slice with
+    (complement): HyperFun's R-functions (``alpha = 0``); :func:`union` and
+    friends take ``alpha`` (1 gives exact max/min) and blends. Evaluate with :meth:`eval`, mesh with :meth:`mesh`, slice with
     :meth:`slice_to`, measure with :meth:`analyze`. Shapes pickle as their
     recipe (see the module docs), so they can be sent to Dask workers."""
 
@@ -625,14 +625,16 @@ def _alpha(a) -> "_core.Expr":
 
 @_recorded
 def union(a: Shape, b: Shape, alpha: Field = 0.0) -> Shape:
-    """R-function union (``alpha = 0``: max; 1: ``f1 + f2``; in between,
-    smooth)."""
+    """R-function union ``(f1 + f2 + sqrt(f1^2 + f2^2 - 2 alpha f1 f2)) /
+    (1 + alpha)``: ``alpha = 0`` (the default) is HyperFun's ``|``, smooth
+    where the operands meet; ``alpha = 1`` is exactly ``max``."""
     return Shape(_core.shape(_core.set_op("union", _shape(a).value._e, _shape(b).value._e, _alpha(alpha))))
 
 
 @_recorded
 def intersection(a: Shape, b: Shape, alpha: Field = 0.0) -> Shape:
-    """R-function intersection (``alpha = 0``: min)."""
+    """R-function intersection: ``alpha = 0`` is HyperFun's ``&``,
+    ``alpha = 1`` exactly ``min``."""
     return Shape(
         _core.shape(_core.set_op("intersection", _shape(a).value._e, _shape(b).value._e, _alpha(alpha)))
     )

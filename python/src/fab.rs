@@ -287,9 +287,22 @@ impl PyShape {
         Ok(bytes.iter().map(|b| PyBytes::new(py, b)).collect())
     }
 
-    /// Run-time errors of the model at the pixel centres of a stack.
-    fn slice_census(&self, bounds: Box3, layer: f64, pixel: f64) -> PyResult<Option<u64>> {
-        Ok(census(&self.s, &slice_grid(bounds, layer, pixel)?))
+    /// Run-time errors of the model at the pixel centres of layers
+    /// `k0..k1` of a stack (None: the model has no error channel).
+    #[pyo3(signature = (bounds, layer, pixel, k0=0, k1=None))]
+    fn slice_census(
+        &self,
+        py: Python<'_>,
+        bounds: Box3,
+        layer: f64,
+        pixel: f64,
+        k0: usize,
+        k1: Option<usize>,
+    ) -> PyResult<Option<u64>> {
+        let g = slice_grid(bounds, layer, pixel)?;
+        let k1 = k1.unwrap_or(g.layers).min(g.layers);
+        let s = self.s.clone();
+        Ok(py.allow_threads(|| census_of(&s, &g, k0, k1)))
     }
 
     /// A ray-cast image (height x width x 3, uint8), a cut-away, or a
@@ -380,9 +393,13 @@ impl PyShape {
 /// Run-time errors at the pixel centres (None: the model has no error
 /// channel).
 fn census(shape: &microfrep::Shape, g: &SliceGrid) -> Option<u64> {
+    census_of(shape, g, 0, g.layers)
+}
+
+fn census_of(shape: &microfrep::Shape, g: &SliceGrid, k0: usize, k1: usize) -> Option<u64> {
     let xs: Vec<f64> = (0..g.nx).map(|i| g.x(i)).collect();
     let ys: Vec<f64> = (0..g.ny).map(|j| g.y(j)).collect();
-    let zs: Vec<f64> = (0..g.layers).map(|k| g.z(k)).collect();
+    let zs: Vec<f64> = (k0..k1).map(|k| g.z(k)).collect();
     shape.error_census(&xs, &ys, &zs).map(|c| c.errors)
 }
 
