@@ -8,6 +8,7 @@ mod hyperfun;
 mod mesh;
 mod parts;
 mod pores;
+mod python;
 mod slice;
 mod structures;
 mod studio;
@@ -49,6 +50,10 @@ const SUITES: &[(&str, &str)] = &[
         "Kou-Tan bone (>1000 pores): build, mesh at 256^3, slicing vs a gyroid of the same cell",
     ),
     (
+        "python",
+        "Python package: Shape.eval on 10^7 points vs eval_points_par, Dask slice/analyze 1 vs 2 workers",
+    ),
+    (
         "studio",
         "microfrep serve: edit to first preview mesh and to refined mesh, three examples",
     ),
@@ -74,6 +79,7 @@ fn main() {
         "mesh" => mesh::run(),
         "parts" => parts::run(),
         "pores" => pores::run(),
+        "python" => python::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),

@@ -123,6 +123,6 @@ def test_precise_values_match_the_cli():
     p = pts(50, seed=3, lo=-1, hi=1).astype(np.float64)
     text = "\n".join(" ".join(repr(float(c)) for c in q) for q in p) + "\n"
     out = subprocess.run([cli, "eval", "toriball"], input=text, capture_output=True, text=True, check=True)
-    want = [float(line.split()[-1]) for line in out.stdout.strip().splitlines()]
+    want = [float(line.split()[0]) for line in out.stdout.strip().splitlines()]
     got = mf.load("toriball").eval(p, precise=True)
     assert len(want) == len(got) and all(a == b for a, b in zip(got, want))
