@@ -26,7 +26,7 @@ import microfrep as mf
 from microfrep import _core
 
 
-def best(f, reps=3):
+def best(f, reps=7):
     ts = []
     for _ in range(reps):
         t = time.perf_counter()

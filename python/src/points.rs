@@ -126,6 +126,11 @@ fn with_points<R: Send>(
 
 /// Output `k` of `tape` at every point, in f32, on all threads.
 fn eval_tape(tape: &Tape, k: usize, pts: Points, out: &mut [f32]) {
+    if let (0, Points::F32(v)) = (k, pts) {
+        if let Some(flat) = v.as_slice() {
+            return eval_rows(tape, flat, out);
+        }
+    }
     let cols = pts.columns();
     out.par_chunks_mut(CHUNK).enumerate().for_each_init(
         || (BatchEval::new(tape), Vec::new(), Vec::new(), Vec::new()),
@@ -138,6 +143,29 @@ fn eval_tape(tape: &Tape, k: usize, pts: Points, out: &mut [f32]) {
                     pts.gather(s, e, xs, ys, zs);
                     ev.eval_output(k, xs, ys, zs, o);
                 }
+            }
+        },
+    );
+}
+
+/// The value at C-order rows `x y z`: each block of points is split into
+/// the evaluator's own x, y, z lanes (in L1 cache) and evaluated there, so
+/// the rows are read once and nothing else is written but the output.
+fn eval_rows(tape: &Tape, flat: &[f32], out: &mut [f32]) {
+    out.par_chunks_mut(CHUNK).enumerate().for_each_init(
+        || BatchEval::new(tape),
+        |ev, (ci, o)| {
+            let s = ci * CHUNK;
+            for (bi, ob) in o.chunks_mut(BLOCK).enumerate() {
+                let at = s + bi * BLOCK;
+                let rows = &flat[3 * at..3 * (at + ob.len())];
+                let (lx, ly, lz) = ev.coords_mut();
+                for (i, p) in rows.chunks_exact(3).enumerate() {
+                    lx[i] = p[0];
+                    ly[i] = p[1];
+                    lz[i] = p[2];
+                }
+                ob.copy_from_slice(ev.eval_loaded(ob.len()));
             }
         },
     );
