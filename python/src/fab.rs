@@ -19,6 +19,10 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 type Box3 = ([f64; 3], [f64; 3]);
+/// A mesh as NumPy arrays: vertices (N x 3) and faces (M x 3).
+type MeshArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<u32>>);
+/// A slice grid: layers, nx, ny, min and max corners.
+type GridInfo = (usize, usize, usize, [f64; 3], [f64; 3]);
 
 fn cells(name: &str) -> PyResult<CellMethod> {
     match name {
@@ -75,7 +79,7 @@ impl PyShape {
         resolution: usize,
         bounds: Option<Box3>,
         cells: &str,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<u32>>)> {
+    ) -> PyResult<MeshArrays<'py>> {
         let b = self.frame(py, bounds)?;
         let mut opts = MeshOptions::new(b.corners(), resolution);
         opts.cells = self::cells(cells)?;
@@ -154,7 +158,7 @@ impl PyShape {
         layer: f64,
         pixel: f64,
         bounds: Option<Box3>,
-    ) -> PyResult<(usize, usize, usize, [f64; 3], [f64; 3])> {
+    ) -> PyResult<GridInfo> {
         let b = self.frame(py, bounds)?;
         let g = slice_grid((b.min, b.max), layer, pixel)?;
         Ok((g.layers, g.nx, g.ny, b.min, b.max))
@@ -192,21 +196,23 @@ impl PyShape {
         let shape = self.s.clone();
         let data = py.allow_threads(|| {
             let mut data = vec![0u8; (k1 - k0) * nx * ny];
-            data.par_chunks_mut(nx * ny).enumerate().for_each(|(i, img)| {
-                let l = microfrep::fab::rasterize(&shape, &g, k0 + i);
-                let pixels = if aa {
-                    let cov = microfrep::fab::coverage::coverage(
-                        &shape,
-                        &l,
-                        g.pixel,
-                        [g.min[0], g.min[1]],
-                    );
-                    microfrep::fab::image::GreyImage::from_coverage(nx, ny, &cov).pixels
-                } else {
-                    microfrep::fab::image::GreyImage::binary(&l).pixels
-                };
-                img.copy_from_slice(&pixels);
-            });
+            data.par_chunks_mut(nx * ny)
+                .enumerate()
+                .for_each(|(i, img)| {
+                    let l = microfrep::fab::rasterize(&shape, &g, k0 + i);
+                    let pixels = if aa {
+                        let cov = microfrep::fab::coverage::coverage(
+                            &shape,
+                            &l,
+                            g.pixel,
+                            [g.min[0], g.min[1]],
+                        );
+                        microfrep::fab::image::GreyImage::from_coverage(nx, ny, &cov).pixels
+                    } else {
+                        microfrep::fab::image::GreyImage::binary(&l).pixels
+                    };
+                    img.copy_from_slice(&pixels);
+                });
             data
         });
         data.into_pyarray(py)

@@ -389,7 +389,7 @@ fn primitive(
         "ellipsoid" => prims::ellipsoid(&p, &p3(c), &p3(v.unwrap_or([1.0; 3]))),
         "box" => {
             let w = v.ok_or_else(|| errors::input("box: the size is required"))?;
-            if w.iter().any(|s| !(*s > 0.0)) {
+            if w.iter().any(|s| s.is_nan() || *s <= 0.0) {
                 return Err(errors::input(format!("box: sizes {w:?} must be > 0")));
             }
             prims::block(&p, &p3(c), &p3(w))
@@ -487,7 +487,10 @@ const DENSITIES: [f64; 22] = [
 type Solvers = Mutex<HashMap<String, Arc<DensitySolver>>>;
 
 /// One density solver per structure and process, built on first use.
-fn solver(key: &str, make: impl FnOnce() -> PyResult<DensitySolver>) -> PyResult<Arc<DensitySolver>> {
+fn solver(
+    key: &str,
+    make: impl FnOnce() -> PyResult<DensitySolver>,
+) -> PyResult<Arc<DensitySolver>> {
     static CACHE: OnceLock<Solvers> = OnceLock::new();
     let cache = CACHE.get_or_init(Default::default);
     if let Some(s) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(key) {

@@ -32,7 +32,11 @@ fn to_arrays<'py>(py: Python<'py>, b: &[BrickMeasures]) -> BrickArrays<'py> {
         }
     }
     let s: Vec<u8> = b.iter().map(|m| m.sampled as u8).collect();
-    (ids.into_pyarray(py), vals.into_pyarray(py), s.into_pyarray(py))
+    (
+        ids.into_pyarray(py),
+        vals.into_pyarray(py),
+        s.into_pyarray(py),
+    )
 }
 
 fn from_arrays(
@@ -124,7 +128,9 @@ fn analysis_refine<'py>(
     let nb = partial::brick_counts(&g);
     let total = nb[0] * nb[1] * nb[2];
     if let Some(b) = bricks.iter().find(|&&b| b >= total) {
-        return Err(errors::input(format!("brick {b} is not in the grid of {total}")));
+        return Err(errors::input(format!(
+            "brick {b} is not in the grid of {total}"
+        )));
     }
     let (s, r) = (shape.s.clone(), region.map(|r| r.s));
     let m = py.allow_threads(|| partial::refine(&s, r.as_ref(), &g, depth, &bricks, &|_, _| {}));
@@ -180,10 +186,16 @@ fn slab_of(d: &Bound<'_, PyDict>) -> PyResult<SlabLabels> {
             .ok_or_else(|| errors::input(format!("slab labels lack '{k}'")))
     };
     let vec_u8 = |k: &str| -> PyResult<Vec<u8>> {
-        Ok(get(k)?.extract::<PyReadonlyArray1<u8>>()?.as_slice()?.to_vec())
+        Ok(get(k)?
+            .extract::<PyReadonlyArray1<u8>>()?
+            .as_slice()?
+            .to_vec())
     };
     let vec_u32 = |k: &str| -> PyResult<Vec<u32>> {
-        Ok(get(k)?.extract::<PyReadonlyArray1<u32>>()?.as_slice()?.to_vec())
+        Ok(get(k)?
+            .extract::<PyReadonlyArray1<u32>>()?
+            .as_slice()?
+            .to_vec())
     };
     let p: Vec<bool> = get("percolates")?.extract()?;
     if p.len() != 3 {
@@ -230,7 +242,11 @@ fn analysis_merge(
     voxel: Option<f64>,
     depth: u32,
     creased: usize,
-    bricks: Vec<(PyReadonlyArray1<u64>, PyReadonlyArray1<f64>, PyReadonlyArray1<u8>)>,
+    bricks: Vec<(
+        PyReadonlyArray1<u64>,
+        PyReadonlyArray1<f64>,
+        PyReadonlyArray1<u8>,
+    )>,
     labels: Option<Vec<Bound<'_, PyDict>>>,
     has_region: bool,
     name: &str,
@@ -245,15 +261,16 @@ fn analysis_merge(
     let slabs = labels
         .map(|ls| ls.iter().map(slab_of).collect::<PyResult<Vec<_>>>())
         .transpose()?;
-    let (measures, connectivity) = py.allow_threads(|| {
-        let m = partial::merge_measures(&g, depth, creased, all)?;
-        let c = slabs
-            .as_ref()
-            .map(|s| partial::merge_labels(&g, s))
-            .transpose()?;
-        Ok::<_, microfrep::analysis::AnalysisError>((m, c))
-    })
-    .map_err(errors::analysis)?;
+    let (measures, connectivity) = py
+        .allow_threads(|| {
+            let m = partial::merge_measures(&g, depth, creased, all)?;
+            let c = slabs
+                .as_ref()
+                .map(|s| partial::merge_labels(&g, s))
+                .transpose()?;
+            Ok::<_, microfrep::analysis::AnalysisError>((m, c))
+        })
+        .map_err(errors::analysis)?;
     let report = Report {
         grid: g,
         region: has_region,

@@ -13,7 +13,9 @@ use crate::model::PyShape;
 use microfrep::core::eval::BLOCK;
 use microfrep::core::{BatchEval, GradBatchEval, PointEval, Tape};
 use numpy::ndarray::{ArrayView2, Axis};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
@@ -179,7 +181,11 @@ fn check_len(n: usize, per: usize, what: &str) -> PyResult<()> {
 impl PyShape {
     /// Values at the points (f32 batch evaluation); NaN where the model
     /// is undefined.
-    fn eval<'py>(&self, py: Python<'py>, points: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f32>>> {
+    fn eval<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f32>>> {
         let tape = self.s.tape().clone();
         let out = with_points(py, points, |p| {
             check_len(p.len(), 4, "the values")?;
@@ -225,7 +231,14 @@ impl PyShape {
             check_len(p.len(), 16, "the gradients")?;
             let mut out = vec![[0.0f32; 4]; p.len()];
             out.par_chunks_mut(CHUNK).enumerate().for_each_init(
-                || (GradBatchEval::new(&tape), Vec::new(), Vec::new(), Vec::new()),
+                || {
+                    (
+                        GradBatchEval::new(&tape),
+                        Vec::new(),
+                        Vec::new(),
+                        Vec::new(),
+                    )
+                },
                 |(ev, xs, ys, zs), (ci, o)| {
                     let s = ci * CHUNK;
                     p.gather(s, s + o.len(), xs, ys, zs);
@@ -252,11 +265,20 @@ impl PyShape {
             .iter()
             .position(|a| a.name == name)
             .ok_or_else(|| {
-                let names: Vec<&str> = self.s.attributes().iter().map(|a| a.name.as_str()).collect();
+                let names: Vec<&str> = self
+                    .s
+                    .attributes()
+                    .iter()
+                    .map(|a| a.name.as_str())
+                    .collect();
                 errors::input(format!(
                     "model '{}' has no attribute '{name}' (it has: {})",
                     self.name,
-                    if names.is_empty() { "none".to_string() } else { names.join(", ") }
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
                 ))
             })?;
         let out_k = self.s.attribute_output(k);

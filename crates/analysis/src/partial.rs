@@ -105,6 +105,7 @@ pub fn brick_counts(grid: &Grid) -> [usize; 3] {
 /// end on brick boundaries (multiples of [`BRICK`], or the top of the grid).
 pub fn bricks_of_layers(grid: &Grid, k0: usize, k1: usize) -> Result<Vec<usize>> {
     let nz = grid.dims[2];
+    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of is newer than rust-version 1.85
     let aligned = |k: usize| k % BRICK == 0 || k == nz;
     if !(k0 < k1 && k1 <= nz && aligned(k0) && aligned(k1)) {
         return Err(AnalysisError::Input(format!(
