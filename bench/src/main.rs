@@ -9,6 +9,7 @@ mod mesh;
 mod parts;
 mod pores;
 mod simplify;
+mod python;
 mod slice;
 mod structures;
 mod studio;
@@ -50,6 +51,10 @@ const SUITES: &[(&str, &str)] = &[
         "Kou-Tan bone (>1000 pores): build, mesh at 256^3, slicing vs a gyroid of the same cell",
     ),
     (
+        "python",
+        "Python package: Shape.eval on 10^7 points vs eval_points_par, Dask slice/analyze 1 vs 2 workers",
+    ),
+    (
         "studio",
         "microfrep serve: edit to first preview mesh and to refined mesh, three examples",
     ),
@@ -80,6 +85,7 @@ fn main() {
         "parts" => parts::run(),
         "pores" => pores::run(),
         "simplify" => simplify::run(),
+        "python" => python::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
         "structures" => structures::run(),

@@ -60,10 +60,10 @@ impl Connectivity {
     }
 }
 
-const NONE: u32 = u32::MAX;
+pub(crate) const NONE: u32 = u32::MAX;
 /// Flag bits of a component: faces x-, x+, y-, y+, z-, z+ of the bounds,
 /// then "next to a voxel outside the region".
-const OUT: u8 = 1 << 6;
+pub(crate) const OUT: u8 = 1 << 6;
 
 /// Peak bytes of [`connectivity`] on `sampler`'s grid (slab, labels and a
 /// full union-find), used to refuse jobs that cannot fit.
@@ -76,7 +76,7 @@ pub fn predict_bytes(sampler: &Sampler) -> f64 {
     layer * SLAB as f64 + layer * 10.0 + 2.0 * uf_limit(nx * ny) as f64 * 14.0 + 32e6
 }
 
-fn uf_limit(layer: usize) -> usize {
+pub(crate) fn uf_limit(layer: usize) -> usize {
     4 * layer + 4096
 }
 
@@ -138,15 +138,15 @@ fn label(sampler: &Sampler, progress: Progress, limit: usize) -> Result<Connecti
 }
 
 #[derive(Default)]
-struct Uf {
-    parent: Vec<u32>,
-    count: Vec<u64>,
-    flags: Vec<u8>,
-    kind: Vec<u8>,
+pub(crate) struct Uf {
+    pub(crate) parent: Vec<u32>,
+    pub(crate) count: Vec<u64>,
+    pub(crate) flags: Vec<u8>,
+    pub(crate) kind: Vec<u8>,
 }
 
 impl Uf {
-    fn make(&mut self, kind: u8) -> u32 {
+    pub(crate) fn make(&mut self, kind: u8) -> u32 {
         let id = self.parent.len() as u32;
         self.parent.push(id);
         self.count.push(0);
@@ -155,7 +155,7 @@ impl Uf {
         id
     }
 
-    fn find(&mut self, mut x: u32) -> u32 {
+    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
         while self.parent[x as usize] != x {
             let p = self.parent[x as usize];
             self.parent[x as usize] = self.parent[p as usize];
@@ -164,7 +164,7 @@ impl Uf {
         x
     }
 
-    fn union(&mut self, a: u32, b: u32) -> u32 {
+    pub(crate) fn union(&mut self, a: u32, b: u32) -> u32 {
         let (a, b) = (self.find(a), self.find(b));
         if a == b {
             return a;
@@ -177,22 +177,22 @@ impl Uf {
     }
 }
 
-struct State {
-    nx: usize,
-    ny: usize,
-    nz: usize,
-    voxel: f64,
-    uf: Uf,
-    prev_occ: Vec<u8>,
-    prev_lab: Vec<u32>,
-    cur_lab: Vec<u32>,
-    out: Connectivity,
-    euler8: i64,
+pub(crate) struct State {
+    pub(crate) nx: usize,
+    pub(crate) ny: usize,
+    pub(crate) nz: usize,
+    pub(crate) voxel: f64,
+    pub(crate) uf: Uf,
+    pub(crate) prev_occ: Vec<u8>,
+    pub(crate) prev_lab: Vec<u32>,
+    pub(crate) cur_lab: Vec<u32>,
+    pub(crate) out: Connectivity,
+    pub(crate) euler8: i64,
 }
 
 impl State {
     /// Labels layer `k` into `cur_lab`, joining with `prev_lab`.
-    fn label_layer(&mut self, k: usize, occ: &[u8]) {
+    pub(crate) fn label_layer(&mut self, k: usize, occ: &[u8]) {
         let (nx, ny) = (self.nx, self.ny);
         for j in 0..ny {
             for i in 0..nx {
@@ -278,7 +278,7 @@ impl State {
 
     /// Folds the components no label in `live` refers to into the totals
     /// and renumbers the rest densely.
-    fn compact(&mut self, live: &mut [u32]) {
+    pub(crate) fn compact(&mut self, live: &mut [u32]) {
         let n = self.uf.parent.len();
         let mut map = vec![NONE; n];
         let mut next = Uf::default();
@@ -326,7 +326,7 @@ impl State {
 /// `8 (v - e/2 + f/4 - c/8)` for each 2x2x2 configuration of voxels around
 /// a lattice vertex (bit `dx + 2 dy + 4 dz`): the vertex's share of the
 /// vertices, edges, faces and cubes of the closed-voxel complex.
-fn euler_table() -> [i64; 256] {
+pub(crate) fn euler_table() -> [i64; 256] {
     let mut t = [0i64; 256];
     for (b, e8) in t.iter_mut().enumerate() {
         let set = |d: [usize; 3]| b >> (d[0] + 2 * d[1] + 4 * d[2]) & 1 == 1;
@@ -373,7 +373,13 @@ fn euler_table() -> [i64; 256] {
 
 /// Euler contributions (times 8) of the lattice vertices between two
 /// voxel layers `below` and `above`.
-fn euler_layer(table: &[i64; 256], below: &[u8], above: &[u8], nx: usize, ny: usize) -> i64 {
+pub(crate) fn euler_layer(
+    table: &[i64; 256],
+    below: &[u8],
+    above: &[u8],
+    nx: usize,
+    ny: usize,
+) -> i64 {
     let solid = |l: &[u8], i: usize, j: usize| -> usize {
         (i >= 1 && j >= 1 && i <= nx && j <= ny && l[(i - 1) + nx * (j - 1)] == SOLID) as usize
     };

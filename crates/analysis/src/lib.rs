@@ -21,7 +21,8 @@
 //! per-tetrahedron closed forms), `connectivity` (slab-wise component
 //! labelling, Euler characteristic), `thickness` (exact Euclidean distance
 //! transform and local thickness on slabs), `report` (all of them in one
-//! call).
+//! call), `partial` (the same measures on ranges of
+//! voxel layers, merged exactly: for distributed runs).
 
 pub mod area;
 pub mod connectivity;
@@ -29,6 +30,7 @@ mod crease;
 pub mod error;
 pub mod grid;
 pub mod measure;
+pub mod partial;
 pub mod report;
 pub mod summary;
 pub mod thickness;

@@ -138,7 +138,7 @@ pub fn measure(solid: &Shape, region: Option<&Shape>, grid: &Grid, progress: Pro
 }
 
 /// Measures the bricks `which` with creased cells halved `depth` times.
-fn pass(
+pub(crate) fn pass(
     solid: &Tape,
     region: Option<&Tape>,
     grid: &Grid,
@@ -182,14 +182,14 @@ fn pass(
 }
 
 #[derive(Default)]
-struct Part {
-    volume: Estimate,
-    region: Estimate,
-    area: Estimate,
-    sampled: bool,
+pub(crate) struct Part {
+    pub(crate) volume: Estimate,
+    pub(crate) region: Estimate,
+    pub(crate) area: Estimate,
+    pub(crate) sampled: bool,
     /// Top-level cells found creased, and points sampled.
-    creased: usize,
-    nodes: usize,
+    pub(crate) creased: usize,
+    pub(crate) nodes: usize,
 }
 
 /// Measures of the voxels `lo..hi`.
@@ -374,7 +374,7 @@ pub const MAX_DEPTH: u32 = 4;
 /// sampled bricks; the depth is lowered until it fits (models with creases
 /// or unresolved detail everywhere get less refinement, and larger error
 /// estimates).
-const REFINE_BUDGET: f64 = 8.0;
+pub(crate) const REFINE_BUDGET: f64 = 8.0;
 
 pub(crate) struct Ctx<'a> {
     pub(crate) s: &'a mut Scratch,
@@ -405,7 +405,7 @@ pub(crate) const SPLIT_POINTS: f64 = 35.0;
 /// refinement of the crossings on its edges (some 6 edges,
 /// [`crate::crease::ROOT_STEPS`] evaluations each) and the centres of its
 /// polygons (some 4). A halving leaves about 4 such cells.
-const LEAF_POINTS: f64 = 22.0;
+pub(crate) const LEAF_POINTS: f64 = 22.0;
 
 /// Solid volume, region volume and area of the cell at `p0` with sides `h`
 /// and corner values `f` (solid) and `r` (region); creased cells are halved
