@@ -3,7 +3,7 @@
 
 use crate::errors;
 use microfrep::core::frep::{self, Blend};
-use microfrep::core::prims;
+use microfrep::shapes as prims;
 use microfrep::core::Expr;
 use microfrep::structures::density::{DensitySolver, LevelTable, STRUT_CELLS, TPMS_CELLS};
 use microfrep::structures::struts::{strut_lattice, StrutLattice};
