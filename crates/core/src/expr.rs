@@ -14,22 +14,31 @@ use std::sync::Arc;
 /// Coordinate axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Axis {
+    /// The x axis.
     X = 0,
+    /// The y axis.
     Y = 1,
+    /// The z axis.
     Z = 2,
 }
 
 /// One node of an expression tree.
 #[derive(Clone)]
 pub enum ExprNode {
+    /// A coordinate of the point being evaluated.
     Var(Axis),
+    /// A constant.
     Const(f64),
     /// A named parameter whose value is chosen at evaluation time.
     Param {
+        /// Name the evaluators look the parameter up by.
         name: Arc<str>,
+        /// Value used until an evaluator sets another.
         default: f64,
     },
+    /// An operation with one argument.
     Unary(UnaryOp, Expr),
+    /// An operation with two arguments, in order.
     Binary(BinaryOp, Expr, Expr),
     /// Integer power by repeated multiplication.
     PowI(Expr, i32),
@@ -59,8 +68,11 @@ pub enum ExprNode {
     /// A data-driven field at mapped coordinates. `comp` 0 is the value,
     /// 1..=3 the partial derivatives along x, y, z.
     Field {
+        /// The field being sampled.
         field: Arc<dyn Field>,
+        /// 0 for the value, 1, 2, 3 for the x, y, z partial derivative.
         comp: u8,
+        /// The (mapped) point at which the field is sampled.
         args: [Expr; 3],
     },
 }
@@ -101,15 +113,19 @@ impl Expr {
     fn new(n: ExprNode) -> Expr {
         Expr(Arc::new(n))
     }
+    /// The node at the root of this expression.
     pub fn node(&self) -> &ExprNode {
         &self.0
     }
+    /// The x coordinate.
     pub fn x() -> Expr {
         Expr::new(ExprNode::Var(Axis::X))
     }
+    /// The y coordinate.
     pub fn y() -> Expr {
         Expr::new(ExprNode::Var(Axis::Y))
     }
+    /// The z coordinate.
     pub fn z() -> Expr {
         Expr::new(ExprNode::Var(Axis::Z))
     }
@@ -117,9 +133,12 @@ impl Expr {
     pub fn xyz() -> [Expr; 3] {
         [Expr::x(), Expr::y(), Expr::z()]
     }
+    /// The coordinate along `a`.
     pub fn var(a: Axis) -> Expr {
         Expr::new(ExprNode::Var(a))
     }
+    /// A constant (also available through `From<f64>`, so plain numbers mix
+    /// with expressions in arithmetic).
     pub fn constant(c: f64) -> Expr {
         Expr::new(ExprNode::Const(c))
     }
@@ -154,12 +173,14 @@ impl Expr {
         }
     }
 
+    /// `op(a)`; folded to a constant when `a` is one.
     pub fn unary(op: UnaryOp, a: Expr) -> Expr {
         if let Some(c) = a.as_const() {
             return Expr::constant(op.apply(c));
         }
         Expr::new(ExprNode::Unary(op, a))
     }
+    /// `op(a, b)`; folded to a constant when both arguments are.
     pub fn binary(op: BinaryOp, a: Expr, b: Expr) -> Expr {
         if let (Some(x), Some(y)) = (a.as_const(), b.as_const()) {
             return Expr::constant(op.apply(x, y));
@@ -174,66 +195,87 @@ impl Expr {
         Expr::new(ExprNode::Select(cond, a, b))
     }
 
+    /// `-self`.
     pub fn neg(&self) -> Expr {
         Expr::unary(UnaryOp::Neg, self.clone())
     }
+    /// `|self|`.
     pub fn abs(&self) -> Expr {
         Expr::unary(UnaryOp::Abs, self.clone())
     }
+    /// -1, 0 or 1 by the sign of `self` (0 where it is NaN).
     pub fn sign(&self) -> Expr {
         Expr::unary(UnaryOp::Sign, self.clone())
     }
+    /// Square root (NaN below 0).
     pub fn sqrt(&self) -> Expr {
         Expr::unary(UnaryOp::Sqrt, self.clone())
     }
+    /// `self * self`; its interval bound is never negative.
     pub fn square(&self) -> Expr {
         Expr::unary(UnaryOp::Square, self.clone())
     }
+    /// `e^self`.
     pub fn exp(&self) -> Expr {
         Expr::unary(UnaryOp::Exp, self.clone())
     }
+    /// Natural logarithm (-inf at 0, NaN below).
     pub fn ln(&self) -> Expr {
         Expr::unary(UnaryOp::Ln, self.clone())
     }
+    /// Sine, argument in radians.
     pub fn sin(&self) -> Expr {
         Expr::unary(UnaryOp::Sin, self.clone())
     }
+    /// Cosine, argument in radians.
     pub fn cos(&self) -> Expr {
         Expr::unary(UnaryOp::Cos, self.clone())
     }
+    /// Tangent, argument in radians.
     pub fn tan(&self) -> Expr {
         Expr::unary(UnaryOp::Tan, self.clone())
     }
+    /// Arc sine in `[-pi/2, pi/2]` (NaN outside `[-1, 1]`).
     pub fn asin(&self) -> Expr {
         Expr::unary(UnaryOp::Asin, self.clone())
     }
+    /// Arc cosine in `[0, pi]` (NaN outside `[-1, 1]`).
     pub fn acos(&self) -> Expr {
         Expr::unary(UnaryOp::Acos, self.clone())
     }
+    /// Arc tangent in `(-pi/2, pi/2)`.
     pub fn atan(&self) -> Expr {
         Expr::unary(UnaryOp::Atan, self.clone())
     }
+    /// Hyperbolic sine.
     pub fn sinh(&self) -> Expr {
         Expr::unary(UnaryOp::Sinh, self.clone())
     }
+    /// Hyperbolic cosine.
     pub fn cosh(&self) -> Expr {
         Expr::unary(UnaryOp::Cosh, self.clone())
     }
+    /// Hyperbolic tangent.
     pub fn tanh(&self) -> Expr {
         Expr::unary(UnaryOp::Tanh, self.clone())
     }
+    /// Largest integer not above `self`.
     pub fn floor(&self) -> Expr {
         Expr::unary(UnaryOp::Floor, self.clone())
     }
+    /// Smallest integer not below `self`.
     pub fn ceil(&self) -> Expr {
         Expr::unary(UnaryOp::Ceil, self.clone())
     }
+    /// Integer part, rounding towards zero.
     pub fn trunc(&self) -> Expr {
         Expr::unary(UnaryOp::Trunc, self.clone())
     }
+    /// Nearest integer, halves away from zero.
     pub fn round(&self) -> Expr {
         Expr::unary(UnaryOp::Round, self.clone())
     }
+    /// `self - floor(self)`, in `[0, 1)`.
     pub fn fract(&self) -> Expr {
         Expr::unary(UnaryOp::Fract, self.clone())
     }
@@ -241,6 +283,8 @@ impl Expr {
     pub fn not(&self) -> Expr {
         Expr::unary(UnaryOp::Not, self.clone())
     }
+    /// Real power `self^e` (NaN for a negative base with a fractional
+    /// exponent; use [`Expr::powi`] for integer exponents).
     pub fn pow(&self, e: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Pow, self.clone(), e.into())
     }
@@ -256,12 +300,15 @@ impl Expr {
             },
         }
     }
+    /// `atan2(self, x)`: the angle of the point `(x, self)`, in `[-pi, pi]`.
     pub fn atan2(&self, x: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Atan2, self.clone(), x.into())
     }
+    /// Smaller of the two; NaN if either is NaN.
     pub fn min(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Min, self.clone(), b.into())
     }
+    /// Larger of the two; NaN if either is NaN.
     pub fn max(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Max, self.clone(), b.into())
     }
@@ -273,27 +320,36 @@ impl Expr {
     pub fn rem(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Rem, self.clone(), b.into())
     }
+    /// 1 where `self < b`, else 0.
     pub fn lt(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Lt, self.clone(), b.into())
     }
+    /// 1 where `self <= b`, else 0.
     pub fn le(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Le, self.clone(), b.into())
     }
+    /// 1 where `self > b`, else 0.
     pub fn gt(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Gt, self.clone(), b.into())
     }
+    /// 1 where `self >= b`, else 0.
     pub fn ge(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Ge, self.clone(), b.into())
     }
+    /// 1 where `self == b`, else 0 (named so as not to clash with
+    /// [`PartialEq::eq`]).
     pub fn eq_(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Eq, self.clone(), b.into())
     }
+    /// 1 where `self != b`, else 0.
     pub fn ne_(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Ne, self.clone(), b.into())
     }
+    /// 1 where both are nonzero, else 0.
     pub fn and(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::And, self.clone(), b.into())
     }
+    /// 1 where either is nonzero, else 0.
     pub fn or(&self, b: impl Into<Expr>) -> Expr {
         Expr::binary(BinaryOp::Or, self.clone(), b.into())
     }

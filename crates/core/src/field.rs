@@ -47,20 +47,31 @@ pub struct GridField {
 /// Errors when building a grid field.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum GridError {
+    /// Fewer than two samples on some axis (no cell to interpolate in).
     #[error("grid needs at least 2 samples on each axis, got {0:?}")]
     TooSmall([usize; 3]),
+    /// More samples than [`MAX_SAMPLES`] (or the count overflows).
     #[error("grid of {0:?} samples exceeds the limit of {MAX_SAMPLES}")]
     TooLarge([usize; 3]),
+    /// The value array does not have one value per sample.
     #[error("grid has {got} values, dims {dims:?} need {want}")]
     WrongLength {
+        /// Samples per axis.
         dims: [usize; 3],
+        /// Length of the value array given.
         got: usize,
+        /// Length the dimensions need.
         want: usize,
     },
+    /// `min` is not below `max`, or not finite, on the given axis.
     #[error("grid box is empty or not finite on axis {0}")]
     BadBox(usize),
+    /// A sample is NaN or infinite.
     #[error("grid value {index} is not finite")]
-    NotFinite { index: usize },
+    NotFinite {
+        /// Position in the value array.
+        index: usize,
+    },
 }
 
 /// Most samples a grid may hold (2 GiB of f64), so that a bad size is an
@@ -79,6 +90,14 @@ fn sample_count(dims: [usize; 3]) -> Result<usize, GridError> {
 }
 
 impl GridField {
+    /// A grid of `dims` samples spanning the box `min`..`max` (samples on the
+    /// box corners), `values` with x fastest, then y, then z.
+    /// The cell bounds for interval evaluation are computed here.
+    ///
+    /// # Errors
+    ///
+    /// [`GridError`] when a size is too small or too large, the value count
+    /// does not match, the box is empty or not finite, or a value is not finite.
     pub fn new(
         name: &str,
         dims: [usize; 3],

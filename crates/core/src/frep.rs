@@ -55,12 +55,16 @@ pub fn intersection_all(fs: &[Expr], alpha: impl Into<Expr>) -> Expr {
 /// extent along each argument.
 #[derive(Clone, Debug)]
 pub struct Blend {
+    /// Amount added at the seam (> 0 adds material, < 0 removes it).
     pub a0: Expr,
+    /// Extent of the blend along the first argument.
     pub a1: Expr,
+    /// Extent of the blend along the second argument.
     pub a2: Expr,
 }
 
 impl Blend {
+    /// Blend parameters from the amount and the two extents.
     pub fn new(a0: impl Into<Expr>, a1: impl Into<Expr>, a2: impl Into<Expr>) -> Blend {
         Blend {
             a0: a0.into(),

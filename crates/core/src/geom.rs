@@ -3,10 +3,12 @@
 //! (Plain arrays rather than a vector crate: these few operations are all
 //! the callers need, and the arrays are what they store.)
 
+/// `a - b`.
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
+/// Cross product `a x b`.
 pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -15,10 +17,12 @@ pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// Dot product.
 pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Euclidean length.
 pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }

@@ -11,36 +11,53 @@ use crate::ops::{BinaryOp, SetOp, UnaryOp};
 use std::collections::HashMap;
 use std::sync::Arc;
 
+/// Index of a node in its [`Graph`]; children always have smaller ids.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct NodeId(pub u32);
 
 /// A graph node; children refer to earlier nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Node {
+    /// A coordinate.
     Var(Axis),
     /// Constant, stored as bits so that nodes can be hashed (NaN payloads and
     /// signed zeros stay distinct, which is what bit-exact folding needs).
     Const(u64),
+    /// Parameter by its index in [`Graph::params`].
     Param(u32),
+    /// An operation with one argument.
     Unary(UnaryOp, NodeId),
+    /// An operation with two arguments, in order (commutative ones sorted).
     Binary(BinaryOp, NodeId, NodeId),
+    /// Integer power.
     PowI(NodeId, i32),
+    /// `cond != 0 ? a : b` over `(cond, a, b)`.
     Select(NodeId, NodeId, NodeId),
     /// R-function set operation: `op(a, b)` with parameter `alpha`.
     Set {
+        /// Union or intersection.
         op: SetOp,
+        /// First argument.
         a: NodeId,
+        /// Second argument.
         b: NodeId,
+        /// The R-function parameter.
         alpha: NodeId,
     },
     /// Blended set operation over `[a, b, alpha, a0, a1, a2]`.
     Blend {
+        /// Union or intersection.
         op: SetOp,
+        /// The arguments, as in [`crate::expr::ExprNode::Blend`].
         args: [NodeId; 6],
     },
+    /// A data-driven field sampled at mapped coordinates.
     Field {
+        /// Index in [`Graph::fields`].
         field: u32,
+        /// 0 for the value, 1, 2, 3 for the x, y, z partial derivative.
         comp: u8,
+        /// The point at which the field is sampled.
         args: [NodeId; 3],
     },
 }
@@ -63,10 +80,14 @@ impl Node {
 /// A named parameter: its name and default value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamInfo {
+    /// Name as written in the model.
     pub name: String,
+    /// Value until an evaluator sets another.
     pub default: f64,
 }
 
+/// Interned, constant-folded nodes of one or more expressions, in
+/// topological order, with the fields and parameters they use.
 #[derive(Default, Clone)]
 pub struct Graph {
     nodes: Vec<Node>,
@@ -76,25 +97,36 @@ pub struct Graph {
 }
 
 impl Graph {
+    /// An empty graph.
     pub fn new() -> Graph {
         Graph::default()
     }
 
+    /// All nodes; a node's children come before it.
     pub fn nodes(&self) -> &[Node] {
         &self.nodes
     }
+    /// The node with id `id`.
+    ///
+    /// # Panics
+    ///
+    /// If `id` is not from this graph.
     pub fn node(&self, id: NodeId) -> Node {
         self.nodes[id.0 as usize]
     }
+    /// The distinct fields used, indexed by [`Node::Field`]'s `field`.
     pub fn fields(&self) -> &[Arc<dyn Field>] {
         &self.fields
     }
+    /// The distinct parameters (by name), indexed by [`Node::Param`].
     pub fn params(&self) -> &[ParamInfo] {
         &self.params
     }
+    /// Number of nodes.
     pub fn len(&self) -> usize {
         self.nodes.len()
     }
+    /// Whether the graph has no nodes.
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }
@@ -199,6 +231,7 @@ impl Graph {
         id
     }
 
+    /// The node of constant `c` (bit-exact: `0.0` and `-0.0` differ).
     pub fn constant(&mut self, c: f64) -> NodeId {
         self.intern(Node::Const(c.to_bits()))
     }
@@ -211,6 +244,7 @@ impl Graph {
         }
     }
 
+    /// The node of `op(a)`, folded if `a` is constant; `--a` becomes `a`.
     pub fn unary(&mut self, op: UnaryOp, a: NodeId) -> NodeId {
         if let Some(c) = self.const_value(a) {
             return self.constant(op.apply(c));
@@ -221,6 +255,9 @@ impl Graph {
         self.intern(Node::Unary(op, a))
     }
 
+    /// The node of `op(a, b)`: constants fold, identities exact for every input
+    /// (`a * 1`, `a - 0`, `min(a, a)`, ...) are removed, `a * a` becomes a square,
+    /// and commutative arguments are ordered.
     pub fn binary(&mut self, op: BinaryOp, a: NodeId, b: NodeId) -> NodeId {
         let (ca, cb) = (self.const_value(a), self.const_value(b));
         if let (Some(x), Some(y)) = (ca, cb) {
@@ -247,6 +284,7 @@ impl Graph {
         self.intern(Node::Binary(op, a, b))
     }
 
+    /// The node of `a^n`; constants fold, `n = 1` and `n = 2` simplify.
     pub fn powi(&mut self, a: NodeId, n: i32) -> NodeId {
         if let Some(c) = self.const_value(a) {
             return self.constant(c.powi(n));
@@ -286,6 +324,8 @@ impl Graph {
         self.intern(Node::Set { op, a, b, alpha })
     }
 
+    /// The node of `c != 0 ? a : b`; a constant condition or equal branches
+    /// pick the branch directly.
     pub fn select(&mut self, c: NodeId, a: NodeId, b: NodeId) -> NodeId {
         if let Some(v) = self.const_value(c) {
             return if v != 0.0 { a } else { b };

@@ -13,9 +13,13 @@
 use crate::ops::{self, BinaryOp, SetOp, UnaryOp};
 use std::f64::consts::{FRAC_PI_2, PI};
 
+/// A closed range `[lo, hi]` of f64 values plus a flag for possible NaN
+/// values (see the module docs for the soundness contract).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interval {
+    /// Lower bound.
     pub lo: f64,
+    /// Upper bound.
     pub hi: f64,
     /// Some point value covered by this bound may be NaN.
     nan: bool,
@@ -44,11 +48,14 @@ fn up(v: f64) -> f64 {
 // implement, so the std operator traits are not used for them.
 #[allow(clippy::should_implement_trait)]
 impl Interval {
+    /// The whole line `[-inf, inf]`.
     pub const ENTIRE: Interval = ENTIRE;
 
+    /// `[lo, hi]` without the NaN flag.
     pub fn new(lo: f64, hi: f64) -> Interval {
         Interval { lo, hi, nan: false }
     }
+    /// The single value `v`.
     pub fn point(v: f64) -> Interval {
         Interval::new(v, v)
     }
@@ -78,18 +85,24 @@ impl Interval {
             ..self
         }
     }
+    /// Whether a bound is NaN (the "nothing known" bound).
     pub fn is_nan(&self) -> bool {
         self.lo.is_nan() || self.hi.is_nan()
     }
+    /// Whether `v` lies in the range; always true for a NaN bound.
     pub fn contains(&self, v: f64) -> bool {
         self.is_nan() || (self.lo <= v && v <= self.hi)
     }
+    /// `hi - lo`.
     pub fn width(&self) -> f64 {
         self.hi - self.lo
     }
+    /// The midpoint.
     pub fn mid(&self) -> f64 {
         0.5 * (self.lo + self.hi)
     }
+    /// The smallest range covering both (NaN if either is); the NaN flag is
+    /// the union of both.
     pub fn hull(self, o: Interval) -> Interval {
         if self.is_nan() || o.is_nan() {
             return Interval::nan();
@@ -105,15 +118,21 @@ impl Interval {
         Interval::new(f(self.lo), f(self.hi))
     }
 
+    /// Bound of `-a`.
+    /// The arithmetic methods (`neg` to `max`) bound the non-NaN values and do
+    /// not track the NaN flag; [`Interval::unary`] and [`Interval::binary`] do.
     pub fn neg(self) -> Interval {
         Interval::new(-self.hi, -self.lo)
     }
+    /// Bound of `a + b`.
     pub fn add(self, o: Interval) -> Interval {
         Interval::new(self.lo + o.lo, self.hi + o.hi)
     }
+    /// Bound of `a - b`.
     pub fn sub(self, o: Interval) -> Interval {
         Interval::new(self.lo - o.hi, self.hi - o.lo)
     }
+    /// Bound of `a * b`; the whole line where `0 * inf` could occur.
     pub fn mul(self, o: Interval) -> Interval {
         let c = [
             self.lo * o.lo,
@@ -134,9 +153,11 @@ impl Interval {
             c.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         )
     }
+    /// Bound of `1 / a`.
     pub fn recip(self) -> Interval {
         Interval::point(1.0).div(self)
     }
+    /// Bound of `a / b`; the whole line when `b` may be 0.
     pub fn div(self, o: Interval) -> Interval {
         if o.lo <= 0.0 && o.hi >= 0.0 {
             // Division by (values near) zero: anything, infinities included.
@@ -156,6 +177,7 @@ impl Interval {
             c.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         )
     }
+    /// Bound of `|a|`.
     pub fn abs(self) -> Interval {
         if self.lo >= 0.0 {
             self
@@ -165,16 +187,20 @@ impl Interval {
             Interval::new(0.0, (-self.lo).max(self.hi))
         }
     }
+    /// Bound of `a * a` (never negative, unlike `mul` of the same range).
     pub fn square(self) -> Interval {
         let a = self.abs();
         Interval::new(a.lo * a.lo, a.hi * a.hi)
     }
+    /// Bound of the square root of the non-negative part; NaN bound when all
+    /// of the range is negative.
     pub fn sqrt(self) -> Interval {
         if self.hi < 0.0 {
             return Interval::nan();
         }
         Interval::new(self.lo.max(0.0).sqrt(), self.hi.sqrt())
     }
+    /// Bound of `a^n` by repeated multiplication (keeps the NaN flag).
     pub fn powi(self, n: i32) -> Interval {
         if self.is_nan() {
             return self;
@@ -186,9 +212,11 @@ impl Interval {
         // the end values bound it; no negation of n, which could overflow.
         integer_power(self, n % 2 != 0, n < 0, |v| v.powi(n)).with_nan(self.nan)
     }
+    /// Bound of `min(a, b)`.
     pub fn min(self, o: Interval) -> Interval {
         Interval::new(self.lo.min(o.lo), self.hi.min(o.hi))
     }
+    /// Bound of `max(a, b)`.
     pub fn max(self, o: Interval) -> Interval {
         Interval::new(self.lo.max(o.lo), self.hi.max(o.hi))
     }
@@ -197,11 +225,14 @@ impl Interval {
     pub fn sin(self) -> Interval {
         periodic_bounds(self, 0.0, f64::sin)
     }
+    /// Bound of cos over the interval.
     pub fn cos(self) -> Interval {
         // cos(t) = sin(t + pi/2): maxima at 2k pi.
         periodic_bounds(self, -FRAC_PI_2, f64::cos)
     }
 
+    /// Sound bound of `op` over this range, NaN flag included; a NaN bound
+    /// stays NaN.
     pub fn unary(self, op: UnaryOp) -> Interval {
         if self.is_nan() {
             return self;
@@ -301,6 +332,9 @@ impl Interval {
         }
     }
 
+    /// Sound bound of `op` over the two ranges, NaN flag included. Comparisons
+    /// and logic give a subrange of `[0, 1]`; a NaN argument bound gives a NaN
+    /// bound.
     pub fn binary(self, op: BinaryOp, o: Interval) -> Interval {
         use BinaryOp::*;
         if self.is_nan() || o.is_nan() {

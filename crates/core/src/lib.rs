@@ -13,6 +13,8 @@
 //!
 //! Sign convention everywhere: inside is `f >= 0`.
 
+#![warn(missing_docs)]
+
 pub mod eval;
 pub mod expr;
 pub mod field;

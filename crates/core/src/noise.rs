@@ -89,6 +89,7 @@ fn fade_slope(t: f64) -> f64 {
 }
 
 impl GradientNoise {
+    /// Noise with the lattice permutation shuffled from `seed`.
     pub fn new(seed: u64) -> GradientNoise {
         let mut table: [u8; 256] = std::array::from_fn(|i| i as u8);
         let mut state = seed;

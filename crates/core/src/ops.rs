@@ -7,25 +7,41 @@
 /// Operations with one argument.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum UnaryOp {
+    /// `-a`.
     Neg,
+    /// `|a|`.
     Abs,
     /// -1, 0 or 1 (0 for NaN).
     Sign,
+    /// Square root (NaN below 0).
     Sqrt,
+    /// `a * a`.
     Square,
+    /// `e^a`.
     Exp,
     /// Natural logarithm.
     Ln,
+    /// Sine (radians).
     Sin,
+    /// Cosine (radians).
     Cos,
+    /// Tangent (radians).
     Tan,
+    /// Arc sine.
     Asin,
+    /// Arc cosine.
     Acos,
+    /// Arc tangent.
     Atan,
+    /// Hyperbolic sine.
     Sinh,
+    /// Hyperbolic cosine.
     Cosh,
+    /// Hyperbolic tangent.
     Tanh,
+    /// Round down.
     Floor,
+    /// Round up.
     Ceil,
     /// Towards zero.
     Trunc,
@@ -46,32 +62,46 @@ pub enum UnaryOp {
 /// Operations with two arguments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum BinaryOp {
+    /// `a + b`.
     Add,
+    /// `a - b`.
     Sub,
+    /// `a * b`.
     Mul,
+    /// `a / b`.
     Div,
     /// Real power `a^b` as `powf` (NaN for negative base and fractional exponent).
     Pow,
     /// `atan2(a, b)`, `a` the y-like argument.
     Atan2,
+    /// Smaller argument; NaN if either is NaN.
     Min,
+    /// Larger argument; NaN if either is NaN.
     Max,
     /// Floored modulo: `a - b*floor(a/b)`, sign of `b`.
     Mod,
     /// Truncated remainder (C `fmod`), sign of `a`.
     Rem,
+    /// 1 if `a < b`, else 0.
     Lt,
+    /// 1 if `a <= b`, else 0.
     Le,
+    /// 1 if `a > b`, else 0.
     Gt,
+    /// 1 if `a >= b`, else 0.
     Ge,
+    /// 1 if `a == b`, else 0.
     Eq,
+    /// 1 if `a != b`, else 0.
     Ne,
     /// Logical and of truth values (nonzero is true); result 1 or 0.
     And,
+    /// Logical or of truth values (nonzero is true); result 1 or 0.
     Or,
 }
 
 impl UnaryOp {
+    /// Every unary op, for tests and listings.
     pub const ALL: [UnaryOp; 24] = [
         UnaryOp::Neg,
         UnaryOp::Abs,
@@ -131,6 +161,7 @@ impl UnaryOp {
         }
     }
 
+    /// Lower-case name, for listings and `Debug` output.
     pub fn name(self) -> &'static str {
         use UnaryOp::*;
         match self {
@@ -163,6 +194,7 @@ impl UnaryOp {
 }
 
 impl BinaryOp {
+    /// Every binary op, for tests and listings.
     pub const ALL: [BinaryOp; 18] = [
         BinaryOp::Add,
         BinaryOp::Sub,
@@ -216,6 +248,7 @@ impl BinaryOp {
         matches!(self, Add | Mul | Min | Max | Eq | Ne | And | Or)
     }
 
+    /// Lower-case name, for listings and `Debug` output.
     pub fn name(self) -> &'static str {
         use BinaryOp::*;
         match self {
@@ -251,6 +284,7 @@ pub fn truth(b: bool) -> f64 {
     }
 }
 
+/// -1, 0 or 1 by the sign of `a`; 0 for NaN and for both zeros.
 #[inline]
 pub fn sign(a: f64) -> f64 {
     if a > 0.0 {
@@ -275,6 +309,7 @@ pub fn fmin(a: f64, b: f64) -> f64 {
     }
 }
 
+/// `max` that propagates NaN, the counterpart of [`fmin`].
 #[inline]
 pub fn fmax(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {

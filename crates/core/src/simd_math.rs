@@ -32,6 +32,7 @@ fn parity_sign(k: f32) -> f32 {
     1.0 - 4.0 * odd
 }
 
+/// sin(x), branch-free f32 (see the module docs for the error).
 #[inline(always)]
 pub fn sin(x: f32) -> f32 {
     let k = (x * INV_PI).round_ties_even();
@@ -39,6 +40,7 @@ pub fn sin(x: f32) -> f32 {
     parity_sign(k) * sin_poly(r)
 }
 
+/// cos(x), branch-free f32 (see the module docs for the error).
 #[inline(always)]
 pub fn cos(x: f32) -> f32 {
     // cos(x) = -(-1)^k sin(x - (k + 1/2) pi) with k = round(x/pi - 1/2).

@@ -6,6 +6,8 @@
 
 use crate::expr::Expr;
 
+/// A point as three coordinate expressions (usually `Expr::xyz()` or an
+/// already mapped point).
 pub type P3 = [Expr; 3];
 
 fn e(v: impl Into<Expr>) -> Expr {

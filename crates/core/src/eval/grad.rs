@@ -156,6 +156,7 @@ impl GradBatchEval {
         }
     }
 
+    /// Sets parameter `index` (see [`Tape::param_index`]).
     pub fn set_param(&mut self, index: usize, v: f64) {
         self.inner.set_param(index, v);
     }
