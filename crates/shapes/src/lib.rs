@@ -13,6 +13,8 @@
 //! assert_eq!(PointEval::new(&Tape::new(&ball)).eval([0.0, 0.0, 0.5]), 0.75);
 //! ```
 
+#![warn(missing_docs)]
+
 mod basic;
 mod blobs;
 mod conv;
@@ -36,22 +38,39 @@ pub const HF_EPS: f64 = 1e-6;
 /// Bad list arguments of a primitive.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PrimError {
+    /// A list argument is shorter than the primitive count needs.
     #[error("{prim}: list `{arg}` has {got} entries, {need} needed")]
     TooFew {
+        /// The HyperFun function, e.g. `hfConvLine`.
         prim: &'static str,
+        /// The argument's name in that function.
         arg: &'static str,
+        /// Entries needed.
         need: usize,
+        /// Entries given.
         got: usize,
     },
+    /// A mesh triangle names a vertex that does not exist.
     #[error("{prim}: triangle {tri} refers to vertex {index}, only {count} given")]
     BadIndex {
+        /// The HyperFun function.
         prim: &'static str,
+        /// 0-based triangle number.
         tri: usize,
+        /// The 0-based vertex index found.
         index: usize,
+        /// Number of vertices.
         count: usize,
     },
+    /// A segment with constant, equal ends (HyperFun stops the program
+    /// there).
     #[error("{prim}: segment {index} has zero length")]
-    ZeroSegment { prim: &'static str, index: usize },
+    ZeroSegment {
+        /// The HyperFun function.
+        prim: &'static str,
+        /// 0-based segment number.
+        index: usize,
+    },
 }
 
 /// A constant vector as expressions.
