@@ -2,12 +2,15 @@
 
 use crate::error::{RenderError, Result};
 
+/// A 3-vector in world coordinates.
 pub type V3 = [f64; 3];
 
+/// Dot product.
 pub fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Cross product `a x b`.
 pub fn cross(a: V3, b: V3) -> V3 {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -16,6 +19,7 @@ pub fn cross(a: V3, b: V3) -> V3 {
     ]
 }
 
+/// `a` scaled to unit length (NaN components for the zero vector).
 pub fn normalize(a: V3) -> V3 {
     let l = dot(a, a).sqrt();
     [a[0] / l, a[1] / l, a[2] / l]
@@ -70,15 +74,21 @@ impl View {
 /// starts at `origin(px, py)` and runs along `dir` for `depth`.
 #[derive(Clone, Debug)]
 pub struct Camera {
+    /// Unit direction the rays travel (into the screen).
     pub dir: V3,
+    /// Unit world direction of the screen's +x (to the right).
     pub right: V3,
+    /// Unit world direction of the screen's +y (up).
     pub up: V3,
     /// Centre of the image on the near plane.
     pub eye: V3,
     /// World size of a pixel.
     pub scale: f64,
+    /// Length of each ray from the near plane, world units.
     pub depth: f64,
+    /// Image width in pixels.
     pub width: usize,
+    /// Image height in pixels.
     pub height: usize,
 }
 

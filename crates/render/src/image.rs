@@ -3,15 +3,23 @@
 use crate::error::Result;
 use std::path::Path;
 
+/// An 8-bit RGB image held in memory.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
     /// Rows top first, three bytes per pixel.
     pub data: Vec<u8>,
 }
 
 impl RgbImage {
+    /// The colour at column `x`, row `y` (row 0 at the top).
+    ///
+    /// # Panics
+    ///
+    /// If the pixel is outside the image.
     pub fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
         let k = 3 * (y * self.width + x);
         [self.data[k], self.data[k + 1], self.data[k + 2]]

@@ -1,5 +1,36 @@
 //! Direct rendering of FRep models, no mesh: orthographic ray casting with
 //! interval-arithmetic root finding, cut-away views and section images.
+//!
+//! [`ray_cast`] shades what a [`Camera`] sees of a model inside a box;
+//! [`cutaway`] opens the octant nearest the viewer first, and [`section`]
+//! maps the model's value on a plane to colour. Images are [`RgbImage`]s,
+//! written with [`RgbImage::save_png`]. The same model, box and size give
+//! the same bytes on every run.
+//!
+//! ```
+//! use microfrep_core::{Expr, Shape};
+//! use microfrep_render::{ray_cast, section, Camera, Plane, View};
+//!
+//! let [x, y, z] = Expr::xyz();
+//! let ball = Shape::new(1.0 - (x.square() + y.square() + z.square()));
+//! let (min, max) = ([-1.2; 3], [1.2; 3]);
+//!
+//! // Seen from above, the middle pixel shows the ball, a corner the background.
+//! let cam = Camera::fit(View::Top, min, max, 32, 32);
+//! let img = ray_cast(&ball, &cam, min, max);
+//! assert_eq!(img.pixel(0, 0), [250, 250, 250]);
+//! assert_ne!(img.pixel(16, 16), [250, 250, 250]);
+//!
+//! // The section z = 0: red inside (f > 0), blue outside.
+//! let plane: Plane = "z=0".parse().unwrap();
+//! let sec = section(&ball, plane, min, max, 32, 32);
+//! let [r, _, b] = sec.pixel(16, 16);
+//! assert!(r > b);
+//! let [r, _, b] = sec.pixel(0, 0);
+//! assert!(b > r);
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod camera;
 mod error;

@@ -10,7 +10,9 @@ use rayon::prelude::*;
 /// An axis-aligned plane `axis = value` (axis 0, 1, 2 for x, y, z).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
+    /// Axis the plane is normal to: 0, 1, 2 for x, y, z.
     pub axis: usize,
+    /// Coordinate of the plane on that axis, mm.
     pub value: f64,
 }
 

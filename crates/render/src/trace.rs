@@ -25,6 +25,8 @@ const STEP_PIXELS: f64 = 0.5;
 /// Shortest segment of the interval search, in pixels.
 const FINE_PIXELS: f64 = 0.25;
 
+/// Finds the first surface point along each camera ray (see the module
+/// docs for the search); keeps evaluators and per-tile state between rays.
 pub struct Tracer<'t> {
     cam: &'t Camera,
     /// The box rays are clipped to.
