@@ -3,17 +3,23 @@
 use crate::ast::Pos;
 use std::fmt;
 
+/// How serious a [`Diagnostic`] is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Severity {
+    /// The file cannot be used.
     Error,
+    /// Accepted, but worth knowing (e.g. a CR line end).
     Warning,
 }
 
 /// One located message.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diagnostic {
+    /// Error or warning.
     pub severity: Severity,
+    /// Where in the file.
     pub pos: Pos,
+    /// The text, in the reference interpreter's wording where it has one.
     pub message: String,
 }
 
@@ -22,8 +28,11 @@ pub struct Diagnostic {
 /// need only that.
 #[derive(Clone, Debug, Default)]
 pub struct Diagnostics {
+    /// File name, as given by the caller.
     pub file: String,
+    /// Message of the first error (empty when there is none).
     pub message: String,
+    /// Position of the first error (`0:0` when there is none).
     pub pos: Pos,
     /// Errors and warnings in source order.
     pub items: Vec<Diagnostic>,
@@ -42,10 +51,12 @@ impl Diagnostics {
         }
     }
 
+    /// The errors, in source order.
     pub fn errors(&self) -> impl Iterator<Item = &Diagnostic> {
         self.items.iter().filter(|d| d.severity == Severity::Error)
     }
 
+    /// Whether any item is an error.
     pub fn has_errors(&self) -> bool {
         self.errors().next().is_some()
     }

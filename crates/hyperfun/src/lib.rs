@@ -3,7 +3,31 @@
 //! [`parse`] reads a file into an [`ast::Program`], reporting every error it
 //! can recover from ([`Diagnostics`]); [`lower`] turns a program into core
 //! expressions; [`printer::to_hyperfun`] writes a core expression back as
-//! HyperFun.
+//! HyperFun. [`load`] does parsing and lowering in one step and gives a
+//! [`Model`], whose value follows the core's convention (inside is
+//! `f >= 0`) and whose run-time errors (division by zero, square root of a
+//! negative, ...) come back located, as the reference interpreter reports
+//! them.
+//!
+//! ```
+//! use microfrep_hyperfun::{load, parse};
+//!
+//! let src = "my_model(x[3], a[1]) {
+//!     r = 1 - x[1]^2 - x[2]^2 - x[3]^2;
+//!     my_model = r & x[3];
+//! }";
+//! let model = load(src, "half_ball.hf", None).unwrap();
+//! let v = model.eval_points(&[[0.0, 0.0, 0.5], [0.0, 0.0, -0.5]]);
+//! assert!(v[0].as_ref().unwrap() > &0.0); // inside
+//! assert!(v[1].as_ref().unwrap() < &0.0); // cut away by x[3] >= 0
+//!
+//! // Errors carry the file, line and column.
+//! let err = parse("my_model(x[3], a[1]) { my_model = ; }", "bad.hf").unwrap_err();
+//! assert!(err.has_errors());
+//! assert_eq!((err.file.as_str(), err.pos.line), ("bad.hf", 1));
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod ast;
 pub mod check;

@@ -11,7 +11,9 @@ use std::collections::HashSet;
 /// passed by reference.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ParamKind {
+    /// Any expression.
     Real,
+    /// A bare array name.
     Array,
 }
 

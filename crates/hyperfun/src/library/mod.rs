@@ -31,14 +31,18 @@ pub const SENTINEL: f64 = -1111111111111.0;
 /// Kind of one parameter: an array name passed by reference or a real value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
+    /// An array name, passed by reference (the function may overwrite it).
     A,
+    /// A real value (any expression).
     R,
 }
 
 /// One evaluated argument.
 #[derive(Clone, Debug)]
 pub enum Arg {
+    /// A real argument's value.
     Real(Expr),
+    /// An array argument's elements.
     Array(Vec<Expr>),
 }
 
@@ -51,6 +55,7 @@ impl Arg {
             Arg::Array(_) => Expr::constant(f64::NAN),
         }
     }
+    /// The elements of an array argument (empty for a real one).
     pub fn array(&self) -> &[Expr] {
         match self {
             Arg::Array(v) => v,
@@ -68,7 +73,10 @@ pub fn el(a: &[Expr], i: usize) -> Expr {
 /// What a call produces: its value and the arrays it overwrote
 /// (argument position, new contents).
 pub struct Output {
+    /// The value of the call.
     pub value: Expr,
+    /// Arrays the call overwrote, as (argument position from 0, new
+    /// elements).
     pub writes: Vec<(usize, Vec<Expr>)>,
     /// The builder needed a constant where it got a point-dependent value
     /// (e.g. a term count); the model must take the per-point fallback.
@@ -79,6 +87,7 @@ pub struct Output {
 }
 
 impl Output {
+    /// A call that yields `value` and writes no array.
     pub fn value(value: Expr) -> Output {
         Output {
             value,
@@ -87,6 +96,7 @@ impl Output {
             error: None,
         }
     }
+    /// A call that yields `value` and overwrites the arrays in `writes`.
     pub fn writes(value: Expr, writes: Vec<(usize, Vec<Expr>)>) -> Output {
         Output {
             value,
@@ -95,6 +105,8 @@ impl Output {
             error: None,
         }
     }
+    /// A call that needs constant arguments it did not get, so the model
+    /// must take the per-point fallback.
     pub fn needs_constants() -> Output {
         Output {
             value: Expr::constant(f64::NAN),

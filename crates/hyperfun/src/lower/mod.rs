@@ -85,7 +85,9 @@ pub struct Model {
 /// A static error found while lowering (message, position).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LowerError {
+    /// The reason, as the user should read it.
     pub message: String,
+    /// Where in the file.
     pub pos: Pos,
 }
 

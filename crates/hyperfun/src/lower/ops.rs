@@ -8,17 +8,33 @@ use microfrep_core::{Expr, SetOp};
 /// A run-time error condition: truth value (1 = error) and message.
 pub type Fault = (Expr, &'static str);
 
+/// Run-time error of a division by (nearly) zero.
 pub const DIV_ZERO: &str = "Division by zero";
+/// Run-time error of a negative base raised to a non-integer power.
 pub const NEG_POWER: &str = "Negative value for power";
+/// Run-time error of a base within EPS of zero raised to a power not above
+/// EPS.
 pub const ZERO_POWER: &str = "Zero value in negative or zero power";
+/// Run-time error of the square root of a negative value.
 pub const NEG_SQRT: &str = "Negative value for square root";
+/// Run-time error of the logarithm of a value that is not positive.
 pub const NEG_LOG: &str = "Negative for log function";
+/// Run-time error of `asin` or `acos` outside `[-1, 1]`.
 pub const TRIG_RANGE: &str = "Argument must be in range -1.0 .. +1.0";
+/// Run-time error of `tan` where `|cos| < EPS` (near a pole).
 pub const TAN: &str = "Cannot compute tan for this argument";
+/// Run-time error of an array index outside the array.
 pub const INDEX_RANGE: &str = "Array index out of range";
+/// Run-time error of reading a scalar that was never assigned.
 pub const NOT_INIT: &str = "Not initialized variable";
+/// Run-time error of reading an array element that was never assigned, or
+/// an array that does not exist.
 pub const UNASSIGNED: &str = "Unassigned identificator used in expression";
+/// Run-time error of passing an array to a function while some of its
+/// elements were never assigned.
 pub const ARRAY_UNASSIGNED: &str = "Some items of array are unassigned";
+/// Run-time error of a `while` loop that runs past the iteration limit
+/// (microfrep's own; the reference would hang).
 pub const LOOP_LIMIT: &str = "Loop did not terminate within the iteration limit";
 
 fn c(v: f64) -> Expr {
@@ -59,10 +75,12 @@ pub fn intersection(a: &Expr, b: &Expr) -> Expr {
     Expr::set(SetOp::Intersection, a, b, 0.0)
 }
 
+/// HyperFun's `\`: the intersection of `a` with the complement `-b`.
 pub fn subtraction(a: &Expr, b: &Expr) -> Expr {
     intersection(a, &-b)
 }
 
+/// `a / b`, with the division-by-zero fault where `|b| < EPS`.
 pub fn div(a: &Expr, b: &Expr) -> (Expr, Vec<Fault>) {
     (a / b, vec![(b.abs().lt(EPS), DIV_ZERO)])
 }
