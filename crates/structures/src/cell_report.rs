@@ -17,8 +17,13 @@ use microfrep_core::{PointEval, Tape};
 /// What one axis of the cell allows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisReport {
+    /// The zero sets on the two faces agree: sawtooth replication joins up.
     pub geometric: bool,
+    /// The values on the two faces agree within the tolerance: sawtooth
+    /// replication gives a continuous field.
     pub full: bool,
+    /// The cell is mirror-symmetric about its centre on this axis within the
+    /// tolerance: triangle replication reproduces it.
     pub symmetric: bool,
     /// Largest `|f(face min) - f(face max)|` over the samples.
     pub max_face_diff: f64,
@@ -43,8 +48,10 @@ impl AxisReport {
     }
 }
 
+/// What each axis of a unit cell allows, from [`cell_report`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellReport {
+    /// The reports for x, y and z.
     pub axes: [AxisReport; 3],
     /// The tolerance the value comparisons used.
     pub tol: f64,
@@ -53,12 +60,15 @@ pub struct CellReport {
 }
 
 impl CellReport {
+    /// Geometric connectivity on all three axes.
     pub fn geometric(&self) -> bool {
         self.axes.iter().all(|a| a.geometric)
     }
+    /// Full connectivity on all three axes.
     pub fn full(&self) -> bool {
         self.axes.iter().all(|a| a.full)
     }
+    /// Symmetry on all three axes.
     pub fn symmetric(&self) -> bool {
         self.axes.iter().all(|a| a.symmetric)
     }

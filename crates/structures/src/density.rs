@@ -197,10 +197,12 @@ impl LevelTable {
         })
     }
 
+    /// The densities of the table, increasing.
     pub fn density(&self) -> &[f64] {
         &self.density
     }
 
+    /// The solved level (or radius) at each density, in the same order.
     pub fn level(&self) -> &[f64] {
         &self.level
     }

@@ -9,12 +9,17 @@ use microfrep_shapes::{block, sphere, torus, v3};
 
 /// A named example with its natural bounding box.
 pub struct Example {
+    /// Name used to pick it (e.g. on the command line).
     pub name: &'static str,
+    /// What the model is and where it comes from.
     pub description: &'static str,
+    /// Box `(min, max)` the model fits in.
     pub bounds: ([f64; 3], [f64; 3]),
+    /// Builds the model.
     pub build: fn() -> Expr,
 }
 
+/// Every built-in example.
 pub fn all() -> Vec<Example> {
     vec![
         Example {
@@ -41,10 +46,12 @@ pub fn all() -> Vec<Example> {
     ]
 }
 
+/// The example called `name`, if any.
 pub fn by_name(name: &str) -> Option<Example> {
     all().into_iter().find(|e| e.name == name)
 }
 
+/// The unit sphere `1 - x^2 - y^2 - z^2`.
 pub fn unit_sphere() -> Expr {
     sphere(&Expr::xyz(), &v3([0.0; 3]), 1.0)
 }
@@ -64,6 +71,7 @@ pub fn toriball() -> Expr {
     toriball_with(0.2)
 }
 
+/// [`toriball`] with cells of width `cell_width` instead of 0.2.
 pub fn toriball_with(cell_width: f64) -> Expr {
     let p = Expr::xyz();
     let w = Expr::constant(cell_width);

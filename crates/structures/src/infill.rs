@@ -40,6 +40,7 @@ pub fn graded_by_depth(
 /// How the shell and the truncated lattice are joined.
 #[derive(Clone, Debug)]
 pub enum Join {
+    /// Plain union (the R-function of the given `alpha`).
     Plain,
     /// Blended union (Eq. 7): rods merge into the shell with fillets.
     Blended(Blend),

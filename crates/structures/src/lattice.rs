@@ -8,8 +8,11 @@ use microfrep_core::Expr;
 /// Any of them may be a field.
 #[derive(Clone, Debug)]
 pub struct Slabs {
+    /// Frequency on each axis (slabs repeat every `2 pi / q`).
     pub q: [Expr; 3],
+    /// Phase on each axis, radians.
     pub p: [Expr; 3],
+    /// Threshold on each axis, in (-1, 1); larger means thinner slabs.
     pub l: [Expr; 3],
 }
 

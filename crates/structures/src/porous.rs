@@ -12,7 +12,9 @@ use microfrep_core::Expr;
 /// Per-axis amplitude `p` and frequency `q` of the mapping; any may be a field.
 #[derive(Clone, Debug)]
 pub struct PeriodicMap {
+    /// Amplitude `p` on each axis.
     pub amp: [Expr; 3],
+    /// Frequency `q` on each axis (pores repeat every `pi / q`).
     pub freq: [Expr; 3],
 }
 

@@ -25,7 +25,9 @@ pub enum Wave {
 /// The two replicating functions, for the helpers below.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
+    /// [`Wave::Sawtooth`].
     Sawtooth,
+    /// [`Wave::Triangle`].
     Triangle,
 }
 

@@ -24,8 +24,11 @@ pub const MAX_POINTS: usize = 1 << 24;
 /// Sample points, coordinates by axis.
 #[derive(Clone, Debug)]
 pub struct Samples {
+    /// x coordinates.
     pub x: Vec<f32>,
+    /// y coordinates.
     pub y: Vec<f32>,
+    /// z coordinates.
     pub z: Vec<f32>,
 }
 
@@ -79,10 +82,12 @@ impl Samples {
         self.z.push(z);
     }
 
+    /// Number of points.
     pub fn len(&self) -> usize {
         self.x.len()
     }
 
+    /// Whether there are no points.
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }

@@ -14,17 +14,26 @@
 use microfrep_core::transform::P3;
 use microfrep_core::Expr;
 
+/// A triply periodic minimal surface (the approximations in the module
+/// table).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Tpms {
+    /// Schoen's gyroid.
     Gyroid,
+    /// Schwarz's primitive surface.
     SchwarzP,
+    /// Schwarz's diamond surface.
     SchwarzD,
+    /// Neovius' surface.
     Neovius,
+    /// Schoen's I-WP surface.
     SchoenIwp,
+    /// Fischer and Koch's S surface.
     FischerKochS,
 }
 
 impl Tpms {
+    /// Every surface, in the order of the module table.
     pub const ALL: [Tpms; 6] = [
         Tpms::Gyroid,
         Tpms::SchwarzP,
@@ -34,6 +43,7 @@ impl Tpms {
         Tpms::FischerKochS,
     ];
 
+    /// Lower-case, hyphenated name (`gyroid`, `schwarz-p`, ...).
     pub fn name(self) -> &'static str {
         match self {
             Tpms::Gyroid => "gyroid",

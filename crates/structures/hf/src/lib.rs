@@ -8,6 +8,22 @@
 //! the registry, so no parser change is needed. A host calls [`install`] once
 //! (the `microfrep` CLI does so before loading any model); from then on
 //! every `microfrep_hyperfun::parse`/`load` sees them.
+//!
+//! ```
+//! microfrep_structures_hf::install();
+//! // A gyroid sheet (2 mm cells, wall |f| < 0.3) inside a ball of radius 2.
+//! let src = "my_model(x[3], a[1]) {
+//!     ball = 4 - x[1]^2 - x[2]^2 - x[3]^2;
+//!     my_model = mfGyroidSheet(x, 2, 0.3) & ball;
+//! }";
+//! let model = microfrep_hyperfun::load(src, "gyroid.hf", None).unwrap();
+//! let v = model.eval_points(&[[0.0; 3], [0.5, 0.0, 0.0]]);
+//! assert!(*v[0].as_ref().unwrap() > 0.0); // on the surface: in the wall
+//! assert!(*v[1].as_ref().unwrap() < 0.0); // a quarter cell away: outside
+//! assert!(microfrep_structures_hf::names().contains(&"mfgyroidsheet"));
+//! ```
+
+#![warn(missing_docs)]
 
 mod args;
 mod cells;
