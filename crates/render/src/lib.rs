@@ -2,7 +2,7 @@
 //! interval-arithmetic root finding, cut-away views and section images.
 //!
 //! [`ray_cast`] shades what a [`Camera`] sees of a model inside a box;
-//! [`cutaway`] opens the octant nearest the viewer first, and [`section`]
+//! [`cutaway`] opens the octant nearest the viewer first, and [`section()`]
 //! maps the model's value on a plane to colour. Images are [`RgbImage`]s,
 //! written with [`RgbImage::save_png`]. The same model, box and size give
 //! the same bytes on every run.
