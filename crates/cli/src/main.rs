@@ -7,6 +7,7 @@ mod cell_cmd;
 mod check_cmd;
 mod common;
 mod eval_cmd;
+mod fill_cmd;
 mod mesh_cmd;
 mod render_cmd;
 mod serve_cmd;
@@ -39,6 +40,8 @@ enum Cmd {
     Check(check_cmd::CheckArgs),
     /// Check a unit cell before replication: connectivity, symmetry, safe replication.
     Cell(cell_cmd::CellArgs),
+    /// Fill a part (mesh, scan, HyperFun) with a structure: mesh, slices or HyperFun out.
+    Fill(fill_cmd::FillArgs),
     /// Watertight triangle mesh of a model (.stl, .obj, .ply, .3mf).
     Mesh(mesh_cmd::MeshArgs),
     /// Slice into layer images (png), contours (svg) or a Common Layer Interface file (cli).
@@ -93,6 +96,7 @@ fn main() {
         Cmd::Eval(a) => eval_cmd::run(a),
         Cmd::Check(a) => check_cmd::run(a),
         Cmd::Cell(a) => cell_cmd::run(a),
+        Cmd::Fill(a) => fill_cmd::run(a),
         Cmd::Mesh(a) => mesh_cmd::run(a),
         Cmd::Slice(a) => slice_cmd::run(a),
         Cmd::Render(a) => render_cmd::run(a),

@@ -34,6 +34,7 @@
 
 #![warn(missing_docs)]
 
+pub mod fill;
 pub mod load;
 
 pub use load::{load, LoadError, LoadOptions, Loaded, SourceKind};

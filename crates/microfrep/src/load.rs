@@ -299,6 +299,34 @@ pub fn load_with_progress(
     }
 }
 
+/// Loads a HyperFun file whose `--field` names are already built fields
+/// (e.g. a part sampled once and shared by several models).
+pub fn load_hyperfun_with(
+    spec: &str,
+    opts: &LoadOptions,
+    fields: Vec<(String, Arc<dyn Field>)>,
+) -> Result<Loaded, LoadError> {
+    microfrep_structures_hf::install();
+    let path = Path::new(spec);
+    let text = std::fs::read_to_string(path).map_err(|e| LoadError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let lo = microfrep_hyperfun::LoadOptions {
+        object: opts.object.clone(),
+        params: opts.params.clone(),
+        fields,
+    };
+    let m = microfrep_hyperfun::load_with_options(&text, spec, &lo).map_err(LoadError::HyperFun)?;
+    Ok(Loaded {
+        shape: m.shape(),
+        kind: SourceKind::HyperFun,
+        hyperfun: Some(m),
+        notes: Vec::new(),
+        inputs: vec![path.to_path_buf()],
+    })
+}
+
 fn load_hyperfun(path: &Path, opts: &LoadOptions, progress: Progress) -> Result<Loaded, LoadError> {
     let text = std::fs::read_to_string(path).map_err(|e| LoadError::Io {
         path: path.to_path_buf(),
