@@ -1,4 +1,4 @@
-//! The measures of [`crate::measure`] and [`crate::connectivity`] computed
+//! The measures of [`mod@crate::measure`] and [`mod@crate::connectivity`] computed
 //! on ranges of voxel layers (z-slabs) of one grid, by separate processes
 //! or machines, and merged into exactly what one process computes.
 //!

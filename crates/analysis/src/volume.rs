@@ -1,7 +1,7 @@
 //! Volume of `{f >= 0}` inside a tetrahedron for the linear interpolant of
 //! the vertex values: closed forms for the 1-3 and 2-2 sign splits, from
 //! the cut points of the zero set on the edges; the measures of the cells
-//! of [`crate::measure`] with a sign change, cut at the roots of the field
+//! of [`mod@crate::measure`] with a sign change, cut at the roots of the field
 //! on their tetrahedra's edges, with the polygons' bulges; and the error
 //! estimate of a measure.
 

@@ -6,7 +6,7 @@
 //!   removed ([`atomic::cleanup_all`], called by the CLI's signal handler),
 //!   and an output that would replace one of the run's inputs is refused.
 //! - [`png`]: the one PNG encoder and decoder (grey 1 and 8 bit, RGB, RGBA).
-//! - [`format`]: output formats behind one trait, chosen by file extension
+//! - [`mod@format`]: output formats behind one trait, chosen by file extension
 //!   from a registry, so that a new format plugs in without touching the
 //!   others.
 //! - [`limits`]: the memory a job may use (the smallest of available RAM,

@@ -2,7 +2,7 @@
 //! microstructures.
 //!
 //! This crate is the front door: it re-exports every library crate under a
-//! short name and holds the one loader of models ([`load`]), which every
+//! short name and holds the one loader of models ([`load()`]), which every
 //! host (the `microfrep` CLI, the studio, the Python bindings) uses, so a
 //! HyperFun file, a mesh, a scan or a built-in example becomes the same
 //! [`Shape`] everywhere.
@@ -56,7 +56,7 @@ pub use microfrep_structures as structures;
 
 /// Adds microfrep's HyperFun library (the `mf*` microstructure, graded and
 /// pore functions) to every HyperFun parse and lowering of this process.
-/// [`load`] does this itself; call it before using [`hyperfun`] directly.
+/// [`load()`] does this itself; call it before using [`hyperfun`] directly.
 pub fn install_library() {
     microfrep_structures_hf::install();
 }

@@ -100,7 +100,7 @@ pub enum Error {
     },
 }
 
-/// Result with this crate's [`Error`].
+/// Result with this crate's [`enum@Error`].
 pub type Result<T> = std::result::Result<T, Error>;
 
 pub(crate) fn invalid(part: &str, offset: u64, message: impl Into<String>) -> Error {
