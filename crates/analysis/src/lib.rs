@@ -25,6 +25,7 @@
 //! voxel layers, merged exactly: for distributed runs).
 
 pub mod area;
+pub mod attributes;
 pub mod connectivity;
 mod crease;
 pub mod error;

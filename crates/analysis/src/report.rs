@@ -61,6 +61,9 @@ pub struct Report {
     pub measures: Measures,
     pub connectivity: Option<Connectivity>,
     pub thickness: Option<Thickness>,
+    /// Every attribute channel's integral, mean, minimum and maximum over
+    /// the solid (empty for shapes without channels).
+    pub attributes: Vec<crate::attributes::AttributeStats>,
     /// Wall-clock seconds of the measure, connectivity and thickness stages.
     pub seconds: [f64; 3],
 }
@@ -180,9 +183,11 @@ pub fn analyze(
     } else {
         None
     };
+    let attributes = crate::attributes::attributes(solid, region, &grid);
     Ok(Report {
         grid,
         region: region.is_some(),
+        attributes,
         measures,
         connectivity,
         thickness,

@@ -62,6 +62,14 @@ pub fn to_json(r: &Report, model: &str, region: Option<&str>) -> Value {
         "creased_cells": m.creased_cells,
         "connectivity": conn,
         "thickness": r.thickness.as_ref().map(thickness_json),
+        "attributes": r.attributes.iter().enumerate().map(|(k, a)| json!({
+            "index": k + 1,
+            "name": a.name,
+            "integral": { "value": a.integral, "error": a.error },
+            "mean": a.mean,
+            "min": a.min,
+            "max": a.max,
+        })).collect::<Vec<_>>(),
         "seconds": { "measure": r.seconds[0], "connectivity": r.seconds[1], "thickness": r.seconds[2] },
         "accuracy": "errors are estimates from the grid and the grid coarsened by 2 \
                      (Richardson: second order on smooth surfaces, first order at creases); \
@@ -223,6 +231,17 @@ pub fn to_text(r: &Report, model: &str, region: Option<&str>) -> String {
                 s5(cap)
             );
         }
+    }
+    for (k, a) in r.attributes.iter().enumerate() {
+        println!(
+            "  s[{}]        integral {} ± {}, mean {}, min {}, max {}",
+            k + 1,
+            s(a.integral),
+            e(a.error),
+            s(a.mean),
+            s(a.min),
+            s(a.max)
+        );
     }
     println!(
         "  accuracy    ± are Richardson estimates (grid vs grid coarsened by 2); \

@@ -8,6 +8,7 @@ mod check_cmd;
 mod common;
 mod eval_cmd;
 mod fill_cmd;
+mod materials_cmd;
 mod mesh_cmd;
 mod render_cmd;
 mod serve_cmd;
@@ -42,6 +43,8 @@ enum Cmd {
     Cell(cell_cmd::CellArgs),
     /// Fill a part (mesh, scan, HyperFun) with a structure: mesh, slices or HyperFun out.
     Fill(fill_cmd::FillArgs),
+    /// Multi-material voxel stack (one RGBA PNG per layer) from the attributes s[].
+    Materials(materials_cmd::MaterialsArgs),
     /// Watertight triangle mesh of a model (.stl, .obj, .ply, .3mf).
     Mesh(mesh_cmd::MeshArgs),
     /// Slice into layer images (png), contours (svg) or a Common Layer Interface file (cli).
@@ -97,6 +100,7 @@ fn main() {
         Cmd::Check(a) => check_cmd::run(a),
         Cmd::Cell(a) => cell_cmd::run(a),
         Cmd::Fill(a) => fill_cmd::run(a),
+        Cmd::Materials(a) => materials_cmd::run(a),
         Cmd::Mesh(a) => mesh_cmd::run(a),
         Cmd::Slice(a) => slice_cmd::run(a),
         Cmd::Render(a) => render_cmd::run(a),

@@ -31,6 +31,10 @@ pub struct SliceArgs {
     /// 8-bit images whose grey level is the pixel's area coverage.
     #[arg(long)]
     aa: bool,
+    /// 8-bit images of attribute channel K (1-based, HyperFun's s[K]):
+    /// 255 * clamp(s[K], 0, 1) inside the solid, 0 outside.
+    #[arg(long, conflicts_with = "aa")]
+    attribute: Option<usize>,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -52,7 +56,16 @@ pub fn run(a: SliceArgs) -> Result<()> {
     let bar = a.run.bar("layers");
     bar.set_message("slicing");
     bar.set_length(grid.layers as u64);
-    write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1))?;
+    match a.attribute {
+        Some(k) => {
+            if k == 0 || !matches!(a.format, SliceFormat::Png) {
+                bail!("--attribute K (from 1) writes png layers");
+            }
+            let f = microfrep::fab::AttributeStack::new(&m.shape, k - 1)?;
+            write_stack(&m.shape, &grid, &f, &a.output, &|| bar.inc(1))?
+        }
+        None => write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1))?,
+    }
     bar.finish_and_clear();
     // Run-time errors at the pixel centres: those pixels are NaN (empty).
     let xs: Vec<f64> = (0..grid.nx).map(|i| grid.x(i)).collect();

@@ -2,6 +2,7 @@
 //! (PNG stacks for DLP and binder-jet printers), layer contours (SVG and the
 //! Common Layer Interface for powder-bed machines) and voxel grids.
 
+pub mod attribute;
 pub mod cli_format;
 pub mod contour;
 pub mod coverage;
@@ -17,4 +18,5 @@ pub mod voxels;
 pub use error::{FabError, Result};
 pub use grid::SliceGrid;
 pub use raster::{rasterize, rasterize_at, rasterize_with, LayerValues};
-pub use stack::{layer_polygons, write_stack, Format};
+pub use attribute::AttributeStack;
+pub use stack::{layer_polygons, write_stack, Format, StackFormat};

@@ -7,6 +7,10 @@ use std::path::PathBuf;
 /// Errors of this crate.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// The I/O layer refused or failed (an existing output, an input that
+    /// would be overwritten, a failed rename).
+    #[error(transparent)]
+    File(microfrep_io::IoError),
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {

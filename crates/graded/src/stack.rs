@@ -393,30 +393,12 @@ pub fn layer_file(k: usize) -> String {
 /// `fill` and renaming it when `fill` succeeds (removing it otherwise).
 /// `out` must not exist.
 pub fn write_dir_atomically<R>(out: &Path, fill: impl FnOnce(&Path) -> Result<R>) -> Result<R> {
-    if out.exists() {
-        return Err(Error::Invalid(format!(
-            "{} already exists; remove it or choose another output",
-            out.display()
-        )));
-    }
-    let name = out
-        .file_name()
-        .ok_or_else(|| Error::Invalid(format!("{}: not a file name", out.display())))?;
-    let tmp = out.with_file_name(format!(
-        ".{}.partial-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    if tmp.exists() {
-        fs::remove_dir_all(&tmp).map_err(io_at(&tmp))?;
-    }
-    fs::create_dir(&tmp).map_err(io_at(&tmp))?;
-    let res = fill(&tmp).and_then(|r| fs::rename(&tmp, out).map_err(io_at(out)).map(|_| r));
-    if res.is_err() {
-        // Best effort: the error being reported matters more.
-        let _ = fs::remove_dir_all(&tmp);
-    }
-    res
+    // The project's atomic directory: a unique temporary next to `out`,
+    // renamed when complete, removed on error or interruption.
+    let dir = microfrep_io::AtomicDir::create(out).map_err(Error::File)?;
+    let r = fill(dir.path())?;
+    dir.commit().map_err(Error::File)?;
+    Ok(r)
 }
 
 /// PNG bytes of an image, rows top first; `path` only names it in errors.
