@@ -37,6 +37,9 @@ pub struct FillArgs {
     /// TPMS sheets instead of networks.
     #[arg(long)]
     sheet: bool,
+    /// Write a strut fill to .3mf as plain triangles instead of a beam lattice.
+    #[arg(long)]
+    triangles: bool,
     /// Seed of irregular pores.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -119,6 +122,21 @@ pub fn run(a: FillArgs) -> Result<()> {
         Some("hf") => {
             microfrep::io::atomic::write_file(&a.output, f.source.as_bytes())?;
             serde_json::json!({ "kind": "hyperfun", "binding": f.binding })
+        }
+        Some("3mf") if structure.is_struts() && !a.triangles => {
+            let Structure::Struts(kind) = structure else { unreachable!("checked") };
+            let Some(rho) = a.density else {
+                bail!("a beam lattice takes a constant --density (or write --triangles)")
+            };
+            if a.shell.is_some() {
+                bail!("a beam lattice with a skin: write --triangles (one solid mesh)")
+            }
+            let k = microfrep::structures::struts::StrutLattice::ALL[kind as usize - 1];
+            let r = microfrep::structures::density::strut_radius(k, rho, microfrep::structures::density::STRUT_CELLS)? * a.cell;
+            let b = frame(&f.model, &a.part, &a.run)?;
+            let part = f.part()?;
+            let (beams, nodes) = microfrep::export::beam_lattice_3mf(&part, kind, a.cell, r, b, a.resolution.unwrap_or(128), &a.output)?;
+            serde_json::json!({ "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": r })
         }
         Some("stl" | "obj" | "ply" | "3mf") => {
             let b = frame(&f.model, &a.part, &a.run)?.corners();

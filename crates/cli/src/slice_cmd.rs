@@ -11,6 +11,9 @@ pub enum SliceFormat {
     Png,
     Svg,
     Cli,
+    /// One 3MF file with the slice extension (and a coarse mesh).
+    #[value(name = "3mf")]
+    ThreeMf,
 }
 
 #[derive(Args)]
@@ -49,6 +52,10 @@ pub fn run(a: SliceArgs) -> Result<()> {
             crate::common::check_extension(&a.output, &["cli"], "a CLI slice file")?;
             Format::Cli
         }
+        SliceFormat::ThreeMf => {
+            crate::common::check_extension(&a.output, &["3mf"], "a 3MF slice stack")?;
+            Format::Cli
+        }
     };
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?;
@@ -63,6 +70,9 @@ pub fn run(a: SliceArgs) -> Result<()> {
             }
             let f = microfrep::fab::AttributeStack::new(&m.shape, k - 1)?;
             write_stack(&m.shape, &grid, &f, &a.output, &|| bar.inc(1))?
+        }
+        None if matches!(a.format, SliceFormat::ThreeMf) => {
+            microfrep::export::slice_3mf(&m.shape, &grid, 128, &a.output, &|| bar.inc(1))?;
         }
         None => write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1))?,
     }

@@ -114,6 +114,8 @@ pub struct Filled {
     pub infill: Loaded,
     /// The core: the part below the skin.
     pub core: Loaded,
+    /// The skin alone (empty without one).
+    pub skin: Loaded,
     /// The HyperFun source the model was built from.
     pub source: String,
     /// The part's box.
@@ -368,22 +370,25 @@ pub fn fill(
         "  p = {part_call};\n  d = {depth};\n  rho = {rho};\n  g = {infill};\n"
     ));
     let skin = opts.skin.map(num);
-    let (model, core, fill_only) = match &skin {
+    let (model, core, fill_only, skin_only) = match &skin {
         Some(t) => (
             format!("max(min(p, {t} - d), min(p, g))"),
             format!("min(p, d - {t})"),
             format!("min(min(p, d - {t}), g)"),
+            format!("min(p, {t} - d)"),
         ),
         None => (
             "min(p, g)".to_string(),
             "p".to_string(),
             "min(p, g)".to_string(),
+            "-1".to_string(),
         ),
     };
     for (name, value) in [
         ("my_model", &model),
         ("fill_core", &core),
         ("fill_infill", &fill_only),
+        ("fill_skin", &skin_only),
     ] {
         out.push_str(&format!(
             "{name}(x[3], a[1]) {{\n{body}  {name} = {value};\n}}\n"
@@ -420,6 +425,7 @@ pub fn fill(
     let model = loaded("my_model")?;
     let core = loaded("fill_core")?;
     let infill = loaded("fill_infill")?;
+    let skin_shape = loaded("fill_skin")?;
     let part = cached
         .as_ref()
         .map(|c| microfrep_core::Shape::from_field(c.clone()).with_bounds(bounds));
@@ -427,6 +433,7 @@ pub fn fill(
         model,
         infill,
         core,
+        skin: skin_shape,
         source: out,
         bounds,
         binding,
@@ -689,6 +696,12 @@ pub struct FillReport {
 }
 
 impl Filled {
+    /// The part as the filled model evaluates it (for a mesh part, its
+    /// sampled distance).
+    pub fn part(&self) -> Result<microfrep_core::Shape, microfrep_analysis::AnalysisError> {
+        part_shape(self)
+    }
+
     /// Measures the filled part on a grid of `resolution` voxels on the
     /// longest side of its box.
     pub fn measure(

@@ -34,6 +34,7 @@
 
 #![warn(missing_docs)]
 
+pub mod export;
 pub mod fill;
 pub mod load;
 
