@@ -43,7 +43,13 @@ pub fn attributes(shape: &Shape, region: Option<&Shape>, grid: &Grid) -> Vec<Att
     let tape = shape.outputs();
     let outs: Vec<usize> = (0..n).map(|k| shape.attribute_output(k)).collect();
     let [nx, ny, nz] = grid.dims;
-    let zero = || (vec![[0.0, 0.0, f64::INFINITY, f64::NEG_INFINITY]; n], 0u64, 0u64);
+    let zero = || {
+        (
+            vec![[0.0, 0.0, f64::INFINITY, f64::NEG_INFINITY]; n],
+            0u64,
+            0u64,
+        )
+    };
     let acc: Acc = (0..nz)
         .into_par_iter()
         .fold(
@@ -126,7 +132,11 @@ pub fn attributes(shape: &Shape, region: Option<&Shape>, grid: &Grid) -> Vec<Att
                 name: a.name.clone(),
                 integral,
                 error: (integral - coarse).abs(),
-                mean: if volume > 0.0 { integral / volume } else { f64::NAN },
+                mean: if volume > 0.0 {
+                    integral / volume
+                } else {
+                    f64::NAN
+                },
                 min: if acc.1 > 0 { s[2] } else { f64::NAN },
                 max: if acc.1 > 0 { s[3] } else { f64::NAN },
             }

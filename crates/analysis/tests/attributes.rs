@@ -23,9 +23,15 @@ fn a_graded_ball_integrates_its_channel() {
     assert!((a.integral - want).abs() / want < 0.005, "{a:?} vs {want}");
     assert!(a.error < 0.01 * want, "{a:?}");
     assert!((a.mean - 0.2).abs() < 0.002, "{a:?}");
-    assert!(a.min >= 0.0 && a.min < 1e-3 && a.max > 0.97 && a.max <= 1.0, "{a:?}");
+    assert!(
+        a.min >= 0.0 && a.min < 1e-3 && a.max > 0.97 && a.max <= 1.0,
+        "{a:?}"
+    );
     let vol = 4.0 / 3.0 * std::f64::consts::PI;
-    assert!((b.integral - 2.0 * vol).abs() / (2.0 * vol) < 0.005, "{b:?}");
+    assert!(
+        (b.integral - 2.0 * vol).abs() / (2.0 * vol) < 0.005,
+        "{b:?}"
+    );
     assert_eq!((b.min, b.max, b.mean), (2.0, 2.0, 2.0));
     let j = microfrep_analysis::summary::to_json(&r, "ball", None);
     assert_eq!(j["attributes"][0]["index"], 1);

@@ -124,7 +124,9 @@ pub fn run(a: FillArgs) -> Result<()> {
             serde_json::json!({ "kind": "hyperfun", "binding": f.binding })
         }
         Some("3mf") if structure.is_struts() && !a.triangles => {
-            let Structure::Struts(kind) = structure else { unreachable!("checked") };
+            let Structure::Struts(kind) = structure else {
+                unreachable!("checked")
+            };
             let Some(rho) = a.density else {
                 bail!("a beam lattice takes a constant --density (or write --triangles)")
             };
@@ -132,10 +134,22 @@ pub fn run(a: FillArgs) -> Result<()> {
                 bail!("a beam lattice with a skin: write --triangles (one solid mesh)")
             }
             let k = microfrep::structures::struts::StrutLattice::ALL[kind as usize - 1];
-            let r = microfrep::structures::density::strut_radius(k, rho, microfrep::structures::density::STRUT_CELLS)? * a.cell;
+            let r = microfrep::structures::density::strut_radius(
+                k,
+                rho,
+                microfrep::structures::density::STRUT_CELLS,
+            )? * a.cell;
             let b = frame(&f.model, &a.part, &a.run)?;
             let part = f.part()?;
-            let (beams, nodes) = microfrep::export::beam_lattice_3mf(&part, kind, a.cell, r, b, a.resolution.unwrap_or(128), &a.output)?;
+            let (beams, nodes) = microfrep::export::beam_lattice_3mf(
+                &part,
+                kind,
+                a.cell,
+                r,
+                b,
+                a.resolution.unwrap_or(128),
+                &a.output,
+            )?;
             serde_json::json!({ "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": r })
         }
         Some("stl" | "obj" | "ply" | "3mf") => {

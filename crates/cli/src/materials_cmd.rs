@@ -52,7 +52,10 @@ pub fn run(a: MaterialsArgs) -> Result<()> {
     let n = palette.len();
     let channels = m.shape.attributes().len();
     if channels + 1 < n {
-        bail!("{n} materials need {} attribute channels s[1..]; the model has {channels}", n - 1);
+        bail!(
+            "{n} materials need {} attribute channels s[1..]; the model has {channels}",
+            n - 1
+        );
     }
     let b = frame(&m, &a.model, &a.run)?;
     let grid = match (&a.preset, a.layer, &a.pixel) {
@@ -61,9 +64,16 @@ pub fn run(a: MaterialsArgs) -> Result<()> {
             StackGrid::from_preset(b.min, b.max, p)?
         }
         (None, Some(layer), Some(px)) => {
-            let v: Vec<f64> = px.split(',').map(|t| t.trim().parse()).collect::<Result<_, _>>()
+            let v: Vec<f64> = px
+                .split(',')
+                .map(|t| t.trim().parse())
+                .collect::<Result<_, _>>()
                 .with_context(|| format!("--pixel '{px}': X or X,Y"))?;
-            let pitch = match v[..] { [x] => [x, x], [x, y] => [x, y], _ => bail!("--pixel '{px}': X or X,Y") };
+            let pitch = match v[..] {
+                [x] => [x, x],
+                [x, y] => [x, y],
+                _ => bail!("--pixel '{px}': X or X,Y"),
+            };
             StackGrid::new(b.min, b.max, pitch, layer)?
         }
         _ => bail!("give --preset, or --layer and --pixel"),
@@ -76,7 +86,11 @@ pub fn run(a: MaterialsArgs) -> Result<()> {
     let outs: Vec<usize> = (0..n - 1).map(|k| shape.attribute_output(k)).collect();
     let (nx, ny) = (grid.nx, grid.ny);
     let mut source = |k: usize, fractions: &mut [f32], inside: &mut [bool]| {
-        let (mut x, mut y, mut z) = (vec![0f32; nx * ny], vec![0f32; nx * ny], vec![0f32; nx * ny]);
+        let (mut x, mut y, mut z) = (
+            vec![0f32; nx * ny],
+            vec![0f32; nx * ny],
+            vec![0f32; nx * ny],
+        );
         for j in 0..ny {
             for i in 0..nx {
                 let q = i + nx * j;
@@ -110,7 +124,11 @@ pub fn run(a: MaterialsArgs) -> Result<()> {
         });
         println!("{s}");
     } else if !a.run.quiet {
-        println!("wrote {} ({} layers of {nx} x {ny})", a.output.display(), r.layers);
+        println!(
+            "wrote {} ({} layers of {nx} x {ny})",
+            a.output.display(),
+            r.layers
+        );
         for (k, (c, i)) in r.dither.counts.iter().zip(&r.dither.integrals).enumerate() {
             println!("  material {}: {c} voxels (target {:.1})", k + 1, i);
         }

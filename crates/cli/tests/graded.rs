@@ -11,7 +11,11 @@ fn bin() -> PathBuf {
 
 fn run(args: &[&str]) -> serde_json::Value {
     let out = Command::new(bin()).args(args).output().unwrap();
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).unwrap_or(serde_json::Value::Null)
 }
 
@@ -24,13 +28,35 @@ fn attribute_integral_grey_stack_and_material_volumes_agree() {
     std::fs::create_dir_all(&d).unwrap();
     // One grid for all three: voxel 0.04 over the part's box.
     let bounds = "--bounds=-2,-2,-2,2,2,2";
-    let a = run(&["analyze", MODEL, bounds, "--voxel", "0.04", "--no-connectivity", "--no-thickness", "--json"]);
+    let a = run(&[
+        "analyze",
+        MODEL,
+        bounds,
+        "--voxel",
+        "0.04",
+        "--no-connectivity",
+        "--no-thickness",
+        "--json",
+    ]);
     let s1 = &a["attributes"][0];
     let integral = s1["integral"]["value"].as_f64().unwrap();
     assert!(integral > 0.0 && s1["min"].as_f64().unwrap() >= 0.0, "{a}");
 
     let stack = d.join("grey");
-    run(&["slice", MODEL, bounds, "-o", stack.to_str().unwrap(), "--layer", "0.04", "--pixel", "0.04", "--attribute", "1", "--quiet"]);
+    run(&[
+        "slice",
+        MODEL,
+        bounds,
+        "-o",
+        stack.to_str().unwrap(),
+        "--layer",
+        "0.04",
+        "--pixel",
+        "0.04",
+        "--attribute",
+        "1",
+        "--quiet",
+    ]);
     let mut sum = 0u64;
     for e in std::fs::read_dir(&stack).unwrap() {
         let p = e.unwrap().path();
@@ -40,10 +66,26 @@ fn attribute_integral_grey_stack_and_material_volumes_agree() {
         }
     }
     let grey = sum as f64 * 0.04f64.powi(3) / 255.0;
-    assert!((grey - integral).abs() / integral < 0.005, "{grey} vs {integral}");
+    assert!(
+        (grey - integral).abs() / integral < 0.005,
+        "{grey} vs {integral}"
+    );
 
     let mats = d.join("mats");
-    let r = run(&["materials", MODEL, bounds, "-o", mats.to_str().unwrap(), "--layer", "0.04", "--pixel", "0.04", "--palette", "hard=#ff0000,soft=#0000ff", "--json"]);
+    let r = run(&[
+        "materials",
+        MODEL,
+        bounds,
+        "-o",
+        mats.to_str().unwrap(),
+        "--layer",
+        "0.04",
+        "--pixel",
+        "0.04",
+        "--palette",
+        "hard=#ff0000,soft=#0000ff",
+        "--json",
+    ]);
     let counts = r["counts"].as_array().unwrap();
     let integrals = r["integrals"].as_array().unwrap();
     for (c, i) in counts.iter().zip(integrals) {

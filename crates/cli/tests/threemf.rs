@@ -10,7 +10,11 @@ fn bin() -> PathBuf {
 
 fn ok(args: &[&str]) -> String {
     let out = Command::new(bin()).args(args).output().unwrap();
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
@@ -25,19 +29,44 @@ fn dir(name: &str) -> PathBuf {
 fn strut_fill_is_a_beam_lattice_and_triangles_on_request() {
     let d = dir("beams");
     let part = d.join("ball.stl");
-    ok(&["mesh", "sphere", "-o", part.to_str().unwrap(), "--resolution", "48", "--quiet"]);
+    ok(&[
+        "mesh",
+        "sphere",
+        "-o",
+        part.to_str().unwrap(),
+        "--resolution",
+        "48",
+        "--quiet",
+    ]);
     let out = d.join("lattice.3mf");
     let j: serde_json::Value = serde_json::from_str(&ok(&[
-        "fill", part.to_str().unwrap(), "-o", out.to_str().unwrap(), "--structure", "octet",
-        "--cell", "0.5", "--density", "0.2", "--resolution", "48", "--json",
+        "fill",
+        part.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--structure",
+        "octet",
+        "--cell",
+        "0.5",
+        "--density",
+        "0.2",
+        "--resolution",
+        "48",
+        "--json",
     ]))
     .unwrap();
     let model = microfrep_3mf::read_file(&out).unwrap();
     let lat = microfrep_3mf::lattices(&model).unwrap();
     assert_eq!(lat.len(), 1);
-    assert_eq!(lat[0].beams.len() as u64, j["written"]["beams"].as_u64().unwrap());
+    assert_eq!(
+        lat[0].beams.len() as u64,
+        j["written"]["beams"].as_u64().unwrap()
+    );
     let r = j["written"]["radius"].as_f64().unwrap();
-    assert!(lat[0].beams.iter().all(|b| (b.r1 - r).abs() < 1e-9 && (b.r2 - r).abs() < 1e-9));
+    assert!(lat[0]
+        .beams
+        .iter()
+        .all(|b| (b.r1 - r).abs() < 1e-9 && (b.r2 - r).abs() < 1e-9));
     // Beams reach inside the ball only (clipped to the part, radius slack).
     for b in &lat[0].beams {
         for v in [b.v1, b.v2] {
@@ -47,8 +76,20 @@ fn strut_fill_is_a_beam_lattice_and_triangles_on_request() {
     }
     let tri = d.join("tri.3mf");
     ok(&[
-        "fill", part.to_str().unwrap(), "-o", tri.to_str().unwrap(), "--structure", "octet",
-        "--cell", "0.5", "--density", "0.2", "--resolution", "48", "--triangles", "--quiet",
+        "fill",
+        part.to_str().unwrap(),
+        "-o",
+        tri.to_str().unwrap(),
+        "--structure",
+        "octet",
+        "--cell",
+        "0.5",
+        "--density",
+        "0.2",
+        "--resolution",
+        "48",
+        "--triangles",
+        "--quiet",
     ]);
     let m = microfrep_3mf::read_meshes(&tri).unwrap();
     assert!(!m.is_empty() && m[0].triangles.len() > 1000);
@@ -60,10 +101,24 @@ fn slice_stack_3mf_holds_the_svg_polygons() {
     let d = dir("slices");
     let (svg, tmf) = (d.join("svg"), d.join("stack.3mf"));
     let common = ["--layer", "0.2", "--pixel", "0.02", "--quiet"];
-    let mut a = vec!["slice", "toriball", "-o", svg.to_str().unwrap(), "--format", "svg"];
+    let mut a = vec![
+        "slice",
+        "toriball",
+        "-o",
+        svg.to_str().unwrap(),
+        "--format",
+        "svg",
+    ];
     a.extend(common);
     ok(&a);
-    let mut b = vec!["slice", "toriball", "-o", tmf.to_str().unwrap(), "--format", "3mf"];
+    let mut b = vec![
+        "slice",
+        "toriball",
+        "-o",
+        tmf.to_str().unwrap(),
+        "--format",
+        "3mf",
+    ];
     b.extend(common);
     ok(&b);
     let model = microfrep_3mf::read_file(&tmf).unwrap();
@@ -73,7 +128,11 @@ fn slice_stack_3mf_holds_the_svg_polygons() {
         let text = std::fs::read_to_string(svg.join(format!("layer_{k:05}.svg"))).unwrap();
         let loops = text.matches("<path").count() + text.matches("<polygon").count();
         assert!(loops > 0);
-        assert_eq!(s.polygons.len(), microfrep_fab::svg::read_layer_svg(&text).len(), "layer {k}");
+        assert_eq!(
+            s.polygons.len(),
+            microfrep_fab::svg::read_layer_svg(&text).len(),
+            "layer {k}"
+        );
     }
     // Strictly increasing tops.
     assert!(stack.slices.windows(2).all(|w| w[1].ztop > w[0].ztop));

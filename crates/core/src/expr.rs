@@ -402,6 +402,53 @@ impl Expr {
         memo[&key(self)].clone()
     }
 
+    /// This expression with every set and blend node written out as its
+    /// formula (identical values): what plain interval arithmetic sees of
+    /// a model, for comparisons and for consumers that cannot read set
+    /// nodes.
+    pub fn written_out(&self) -> Expr {
+        let key = |e: &Expr| Arc::as_ptr(&e.0);
+        let mut memo: HashMap<*const ExprNode, Expr> = HashMap::new();
+        let mut stack: Vec<(&Expr, bool)> = vec![(self, false)];
+        while let Some((cur, expanded)) = stack.pop() {
+            if memo.contains_key(&key(cur)) {
+                continue;
+            }
+            if !expanded {
+                stack.push((cur, true));
+                for c in cur.children() {
+                    if !memo.contains_key(&key(c)) {
+                        stack.push((c, false));
+                    }
+                }
+                continue;
+            }
+            let m = |c: &Expr| memo[&key(c)].clone();
+            let out = match cur.node() {
+                ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => cur.clone(),
+                ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
+                ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
+                ExprNode::PowI(a, n) => m(a).powi(*n),
+                ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
+                ExprNode::Set { op, a, b, alpha } => {
+                    Expr::set(*op, &m(a), &m(b), m(alpha)).expand()
+                }
+                ExprNode::Blend { op, args } => {
+                    Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
+                        .expand()
+                        .written_out()
+                }
+                ExprNode::Field { field, comp, args } => Expr::field_comp(
+                    field.clone(),
+                    *comp,
+                    [m(&args[0]), m(&args[1]), m(&args[2])],
+                ),
+            };
+            memo.insert(key(cur), out);
+        }
+        memo[&key(self)].clone()
+    }
+
     /// Number of distinct tree nodes (by pointer), a size measure for tests and reports.
     pub fn node_count(&self) -> usize {
         let mut seen = std::collections::HashSet::new();

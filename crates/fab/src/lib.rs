@@ -15,8 +15,8 @@ pub mod stack;
 pub mod svg;
 pub mod voxels;
 
+pub use attribute::AttributeStack;
 pub use error::{FabError, Result};
 pub use grid::SliceGrid;
 pub use raster::{rasterize, rasterize_at, rasterize_with, LayerValues};
-pub use attribute::AttributeStack;
 pub use stack::{layer_polygons, write_stack, Format, StackFormat};

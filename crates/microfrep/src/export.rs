@@ -3,8 +3,8 @@
 //! with a mesh of the part so viewers without the extension still show it.
 
 use crate::threemf::{
-    write_file, BeamLattice, ClipMode, Mesh as Mesh3, MeshResolution, Model, SliceStack,
-    Transform, Unit, WriteOptions,
+    write_file, BeamLattice, ClipMode, Mesh as Mesh3, MeshResolution, Model, SliceStack, Transform,
+    Unit, WriteOptions,
 };
 use microfrep_core::{Bounds, Shape};
 use microfrep_fab::{layer_polygons, rasterize, SliceGrid};
@@ -61,7 +61,10 @@ pub fn slice_3mf(
         grid.min[2] + grid.layers as f64 * grid.layer,
     ];
     let mut m = Model::new(Unit::Millimeter);
-    let low = m.add_mesh(Some("part"), mesh3(shape, Bounds::new(grid.min, max), preview)?);
+    let low = m.add_mesh(
+        Some("part"),
+        mesh3(shape, Bounds::new(grid.min, max), preview)?,
+    );
     let sid = m.next_id();
     m.slice_stacks
         .push(SliceStack::uniform(sid, grid.min[2], grid.layer, layers));
