@@ -80,22 +80,70 @@ pub(crate) struct Scratch {
     pub(crate) root_vals: Vec<f32>,
 }
 
+/// Bricks measured per step of [`measure`]: their results are summed (in
+/// brick order) and dropped, so the memory does not grow with the grid.
+const CHUNK: usize = 4096;
+
+/// Peak bytes of [`measure`] on `grid` beyond the model: a bit per brick
+/// (which need refining), a chunk of brick results, and each thread's
+/// buffers (a brick's samples and up to [`LEAF_BATCH`] cells waiting to be
+/// measured, with their edges' roots).
+pub fn predict_bytes(grid: &Grid) -> f64 {
+    let nb: f64 = grid
+        .dims
+        .iter()
+        .map(|&d| d.div_ceil(BRICK) as f64)
+        .product();
+    let nodes = ((BRICK + 1) as f64).powi(3);
+    let per_thread = nodes * (3.0 * 4.0 + 2.0 * 4.0 + 2.0 * 24.0)
+        + LEAF_BATCH as f64 * (std::mem::size_of::<Leaf>() as f64 + 19.0 * 2.0 * (4.0 + 40.0));
+    nb / 8.0
+        + CHUNK as f64 * std::mem::size_of::<Part>() as f64
+        + rayon::current_num_threads() as f64 * per_thread
+        + 16e6
+}
+
 /// Measures the solid `f >= 0` (inside `region >= 0` when given) on `grid`.
 /// `progress(done, total)` counts bricks.
 pub fn measure(solid: &Shape, region: Option<&Shape>, grid: &Grid, progress: Progress) -> Measures {
     let (solid, region) = (solid.tape(), region.map(|r| r.tape()));
     let nb = grid.dims.map(|d| d.div_ceil(BRICK));
     let total = nb[0] * nb[1] * nb[2];
+    let mut m = Measures {
+        bricks: total,
+        ..Measures::default()
+    };
+    let add = |m: &mut Measures, p: &Part| {
+        m.volume.add(p.volume);
+        m.region_volume.add(p.region);
+        m.area.add(p.area);
+        if p.sampled {
+            m.sampled_bricks += 1;
+        } else {
+            m.proven_volume += p.region.value;
+        }
+    };
     // First pass: measure the bricks without creased cells, count the
-    // creased cells of the others; then measure those at the deepest depth
-    // the budget allows (one depth for the whole grid keeps the fine and
-    // coarse estimates comparable).
-    let all: Vec<usize> = (0..total).collect();
-    let first = pass(solid, region, grid, 0, true, &all, &|d, _| {
-        progress(d, 2 * total)
-    });
-    let creased: usize = first.iter().map(|p| p.creased).sum();
-    let nodes: usize = first.iter().map(|p| p.nodes).sum();
+    // creased cells of the others (marked in `redo`); then measure those
+    // at the deepest depth the budget allows (one depth for the whole grid
+    // keeps the fine and coarse estimates comparable).
+    let mut redo = vec![0u64; total.div_ceil(64)];
+    let (mut creased, mut nodes) = (0usize, 0usize);
+    for start in (0..total).step_by(CHUNK) {
+        let which: Vec<usize> = (start..(start + CHUNK).min(total)).collect();
+        let parts = pass(solid, region, grid, 0, true, &which, &|d, _| {
+            progress(start + d, 2 * total)
+        });
+        for (&b, p) in which.iter().zip(&parts) {
+            creased += p.creased;
+            nodes += p.nodes;
+            if p.creased > 0 {
+                redo[b / 64] |= 1 << (b % 64);
+            } else {
+                add(&mut m, p);
+            }
+        }
+    }
     let budget = REFINE_BUDGET * nodes as f64;
     let mut depth = 0;
     let mut cost = 0.0;
@@ -109,31 +157,23 @@ pub fn measure(solid: &Shape, region: Option<&Shape>, grid: &Grid, progress: Pro
         depth = d;
     }
     // Bricks without creased cells measure the same at any depth.
-    let redo: Vec<usize> = (0..total).filter(|&b| first[b].creased > 0).collect();
-    let mut parts = first;
-    let again = pass(solid, region, grid, depth, false, &redo, &|d, _| {
-        progress(total + d, 2 * total)
-    });
-    for (&b, p) in redo.iter().zip(again) {
-        parts[b] = p;
+    let is_redo = |b: usize| redo[b / 64] >> (b % 64) & 1 == 1;
+    for start in (0..total).step_by(CHUNK) {
+        let which: Vec<usize> = (start..(start + CHUNK).min(total))
+            .filter(|&b| is_redo(b))
+            .collect();
+        if which.is_empty() {
+            continue;
+        }
+        let parts = pass(solid, region, grid, depth, false, &which, &|_, _| {});
+        for p in &parts {
+            add(&mut m, p);
+        }
+        progress(total + (start + CHUNK).min(total), 2 * total);
     }
     progress(2 * total, 2 * total);
-    let mut m = Measures {
-        bricks: total,
-        refine_depth: depth,
-        creased_cells: creased,
-        ..Measures::default()
-    };
-    for p in &parts {
-        m.volume.add(p.volume);
-        m.region_volume.add(p.region);
-        m.area.add(p.area);
-        if p.sampled {
-            m.sampled_bricks += 1;
-        } else {
-            m.proven_volume += p.region.value;
-        }
-    }
+    m.refine_depth = depth;
+    m.creased_cells = creased;
     m
 }
 
@@ -351,7 +391,13 @@ fn cells(g: &Grid, ctx: &mut Ctx, lo: [usize; 3], n: [usize; 3], centers: &[[f64
         measure_leaves(ctx);
     }
     for (g, &(refined, creased)) in groups.iter().enumerate() {
-        let (coarse, fine) = (ctx.slots[2 * g], ctx.slots[2 * g + 1]);
+        let (mut coarse, mut fine) = (ctx.slots[2 * g], ctx.slots[2 * g + 1]);
+        // A cell holds no less than no solid and no more than its region
+        // (the curvature corrections of features below the voxel size can
+        // overshoot either way).
+        for m in [&mut coarse, &mut fine] {
+            m[0] = m[0].clamp(0.0, m[1].max(0.0));
+        }
         for (q, e) in [&mut part.volume, &mut part.region, &mut part.area]
             .into_iter()
             .enumerate()

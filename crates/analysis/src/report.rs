@@ -84,13 +84,14 @@ impl Report {
         self.measures.region_volume.error()
     }
 
-    /// Solid volume over region volume (relative density).
+    /// Solid volume over region volume (relative density); NaN
+    /// (undefined) when the region is empty.
     pub fn volume_fraction(&self) -> f64 {
         let r = self.region_volume();
         if r > 0.0 {
             self.volume() / r
         } else {
-            0.0
+            f64::NAN
         }
     }
 
@@ -99,11 +100,11 @@ impl Report {
         if r > 0.0 {
             (self.volume_error() + self.volume_fraction() * self.region_volume_error()) / r
         } else {
-            0.0
+            f64::NAN
         }
     }
 
-    /// `1 - volume_fraction`.
+    /// `1 - volume_fraction` (NaN, undefined, for an empty region).
     pub fn porosity(&self) -> f64 {
         1.0 - self.volume_fraction()
     }
@@ -118,22 +119,52 @@ impl Report {
         self.measures.area.error()
     }
 
-    /// Area over solid volume.
+    /// Area over solid volume; NaN (undefined) without solid.
     pub fn specific_surface(&self) -> f64 {
         if self.volume() > 0.0 {
             self.area() / self.volume()
         } else {
-            0.0
+            f64::NAN
         }
     }
 
     pub fn specific_surface_error(&self) -> f64 {
         let (a, v) = (self.area(), self.volume());
-        if a > 0.0 && v > 0.0 {
-            self.specific_surface() * (self.area_error() / a + self.volume_error() / v)
+        if v > 0.0 {
+            self.specific_surface()
+                * (self.area_error() / a.max(f64::MIN_POSITIVE) + self.volume_error() / v)
         } else {
-            0.0
+            f64::NAN
         }
+    }
+
+    /// Why some figures are undefined or the result is empty, for people:
+    /// an empty region, no solid, or solid everywhere.
+    pub fn notes(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let within = if self.region {
+            "inside the region"
+        } else {
+            "in the box"
+        };
+        if self.region_volume() <= 0.0 {
+            out.push(if self.region {
+                "the region is empty inside the box: volume fraction, porosity and specific \
+                 surface are undefined (check --region and --bounds)"
+                    .to_string()
+            } else {
+                "the box has no volume: every figure is undefined".to_string()
+            });
+        } else if self.volume() <= 0.0 {
+            out.push(format!(
+                "no solid {within} at this resolution (voxels of {}): specific surface and \
+                 thickness are undefined; a model thinner than a voxel needs a finer grid",
+                microfrep_io::text::sig(self.grid.voxel_size(), 4)
+            ));
+        } else if self.volume() >= self.region_volume() && self.area() <= 0.0 {
+            out.push(format!("solid everywhere {within}: no pores, no surface"));
+        }
+        out
     }
 }
 
@@ -146,6 +177,20 @@ pub fn analyze(
     opts: &AnalyzeOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> Result<Report> {
+    check_precision(solid, &grid, "the model")?;
+    if let Some(r) = region {
+        check_precision(r, &grid, "the region")?;
+    }
+    let need = crate::measure::predict_bytes(&grid);
+    if need > opts.memory_limit as f64 {
+        return Err(AnalysisError::Memory(format!(
+            "measuring a grid of {:?} voxels needs about {:.0} MiB, over the limit of {:.0} MiB; \
+             lower the resolution",
+            grid.dims,
+            need / MIB,
+            opts.memory_limit as f64 / MIB
+        )));
+    }
     let sampler = Sampler::new(solid, region, grid.clone());
     if opts.connectivity {
         let need = connectivity::predict_bytes(&sampler);
@@ -191,3 +236,17 @@ pub fn analyze(
 }
 
 const MIB: f64 = 1024.0 * 1024.0;
+
+/// Refuses a model whose f32 batch values disagree with its f64 values in
+/// the grid's box (see [`microfrep_io::precision::check_agreement`]).
+fn check_precision(shape: &Shape, grid: &Grid, what: &str) -> Result<()> {
+    use microfrep_io::precision::{check_agreement, probe_points, PROBE_POINTS};
+    let pts = probe_points(grid.lo, grid.hi, PROBE_POINTS);
+    let axis = |a: usize| -> Vec<f32> { pts.iter().map(|p| p[a] as f32).collect() };
+    let mut v32 = vec![0.0f32; pts.len()];
+    shape.batch().eval(&axis(0), &axis(1), &axis(2), &mut v32);
+    let mut pe = shape.point();
+    let v64: Vec<f64> = pts.iter().map(|p| pe.eval(*p)).collect();
+    check_agreement(&pts, &v32, &v64)
+        .map_err(|e| AnalysisError::Input(format!("cannot analyse {what}: {e}")))
+}

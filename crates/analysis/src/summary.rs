@@ -60,6 +60,7 @@ pub fn to_json(r: &Report, model: &str, region: Option<&str>) -> Value {
         "bricks": { "sampled": m.sampled_bricks, "total": m.bricks },
         "refine_depth": m.refine_depth,
         "creased_cells": m.creased_cells,
+        "notes": r.notes(),
         "connectivity": conn,
         "thickness": r.thickness.as_ref().map(thickness_json),
         "seconds": { "measure": r.seconds[0], "connectivity": r.seconds[1], "thickness": r.seconds[2] },
@@ -163,10 +164,10 @@ pub fn to_text(r: &Report, model: &str, region: Option<&str>) -> String {
             s(others)
         );
         println!(
-            "  pores       {} component(s) (6-connected), {:.2}% of pore volume open to the \
+            "  pores       {} component(s) (6-connected), {} % of pore volume open to the \
              outside, {} closed (volume {})",
             c.pore_components,
-            100.0 * c.open_pore_fraction(),
+            s5(100.0 * c.open_pore_fraction()),
             c.closed_pores,
             s(c.closed_pore_volume)
         );
@@ -223,6 +224,9 @@ pub fn to_text(r: &Report, model: &str, region: Option<&str>) -> String {
                 s5(cap)
             );
         }
+    }
+    for n in r.notes() {
+        println!("  note        {n}");
     }
     println!(
         "  accuracy    ± are Richardson estimates (grid vs grid coarsened by 2); \
