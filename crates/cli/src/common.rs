@@ -196,8 +196,9 @@ pub fn parse_box(flag: &str, s: &str) -> Result<([f64; 3], [f64; 3])> {
     if let Some(t) = v.iter().find(|t| !t.is_finite()) {
         bail!("{flag}: {t} is not a finite number");
     }
-    if let Some(t) = v.iter().find(|t| t.abs() > 1e15) {
-        bail!("{flag}: {t} is beyond what the sampling grids can represent (|v| <= 1e15)");
+    let max = microfrep::io::precision::MAX_COORDINATE;
+    if let Some(t) = v.iter().find(|t| t.abs() > max) {
+        bail!("{flag}: {t:e} is beyond what the sampling grids can represent (|v| <= {max:e})");
     }
     let (lo, hi) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]]);
     for (a, name) in ["x", "y", "z"].iter().enumerate() {
@@ -230,4 +231,19 @@ pub fn check_extension(out: &Path, exts: &[&str], what: &str) -> Result<()> {
 /// `v` with 7 significant digits.
 pub fn num(v: f64) -> String {
     microfrep::io::text::sig(v, 7)
+}
+
+/// An error and its causes on one line, each cause once: errors that
+/// already show their source (an I/O error naming its file) are not
+/// followed by the same text again.
+pub fn chain(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for c in e.chain().skip(1) {
+        let t = c.to_string();
+        if !msg.contains(&t) {
+            msg.push_str(": ");
+            msg.push_str(&t);
+        }
+    }
+    msg
 }

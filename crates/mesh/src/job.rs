@@ -20,7 +20,7 @@ use crate::memory::{self, Estimate, GIB};
 use crate::sampled::{sampled_volume, SampledVolume};
 use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
 use crate::write::{format_of, stream_mesh_checked, write_mesh, MeshFormat};
-use crate::{Mesh, MeshError, MeshOptions, Plan};
+use crate::{Grid, Mesh, MeshError, MeshOptions, Plan};
 use microfrep_core::{ErrorCensus, Shape};
 use std::path::Path;
 use std::time::Instant;
@@ -162,7 +162,7 @@ pub fn mesh_to_file(
     } else {
         est.bytes
     };
-    check_size(&opts, &est, predicted, avail, format.streams())?;
+    check_size(&opts, &est, stream, avail, format.streams())?;
     if stream {
         check_disk(out, &est)?;
     }
@@ -329,9 +329,9 @@ fn empty_reason(
     }
     if let Some(v) = sampled.filter(|v| v.value > 0.0) {
         return format!(
-            "the mesh is empty at resolution {} (cells of {h}), but the model has a volume of \
-             about {} there: all of it lies in features thinner than a cell; use a finer \
-             --resolution (or --resolution auto)",
+            "the mesh is empty at resolution {} (cells of {h}): no grid node is inside the \
+             model, though sampling every cell finds a volume of about {}: the model's \
+             features are smaller than a cell; use a finer --resolution (or --resolution auto)",
             opts.resolution,
             sig(v.value)
         );
@@ -365,39 +365,74 @@ pub fn check_precision(shape: &Shape, bounds: [[f64; 3]; 2]) -> Result<(), MeshE
 }
 
 /// Refuses a job predicted to need more memory than `avail`, or more
-/// vertices than 32-bit indices hold.
+/// vertices than 32-bit indices hold; the message names the largest
+/// resolution that would fit both.
 fn check_size(
     opts: &MeshOptions,
     est: &Estimate,
-    predicted: f64,
+    streamed: bool,
     avail: Option<f64>,
     streams: bool,
 ) -> Result<(), MeshError> {
     let n = opts.resolution;
-    if est.vertices > u32::MAX as f64 {
-        return Err(MeshError::TooLarge(format!(
-            "meshing at resolution {n} would make about {:.2e} vertices, more than 32-bit \
-             indices hold ({}); resolution {} would fit",
-            est.vertices,
-            u32::MAX,
-            ((n as f64) * (0.9 * u32::MAX as f64 / est.vertices).sqrt()) as usize
-        )));
-    }
-    if let Some(m) = avail.filter(|&m| predicted > m) {
-        let hint = if streams {
-            ""
-        } else {
-            " (or write .stl or .ply, which are streamed to disk)"
+    let predict = |m: usize| -> (f64, f64) {
+        // Surface (triangles, vertices) grows with the square of the
+        // resolution, the brick table with its cube.
+        let r = m as f64 / n as f64;
+        let e = Estimate {
+            triangles: est.triangles * r * r,
+            vertices: est.vertices * r * r,
+            bytes: (est.bytes - est.volume_bytes) * r * r + est.volume_bytes * r * r * r,
+            volume_bytes: est.volume_bytes * r * r * r,
         };
+        let bytes = match Grid::new(opts.bounds, m.max(1), opts.brick) {
+            Ok(g) if streamed => memory::streaming_bytes_grid(&g, &e),
+            _ => e.bytes,
+        };
+        (bytes, e.vertices)
+    };
+    let ok = |m: usize| {
+        let (b, v) = predict(m);
+        v <= u32::MAX as f64 && avail.is_none_or(|a| b <= a)
+    };
+    if ok(n) {
+        return Ok(());
+    }
+    // The predictions grow with the resolution: bisect for the largest
+    // that fits.
+    let (mut lo, mut hi) = (0usize, n);
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if ok(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let fit = if lo == 0 {
+        "no resolution would fit".to_string()
+    } else {
+        format!("resolution {lo} would fit")
+    };
+    let (bytes, vertices) = predict(n);
+    if vertices > u32::MAX as f64 {
         return Err(MeshError::TooLarge(format!(
-            "meshing at resolution {n} needs about {:.1} GiB but {:.1} GiB are available; \
-             resolution {} would fit{hint}",
-            predicted / GIB,
-            m / GIB,
-            memory::resolution_fitting(est, n, m)
+            "meshing at resolution {n} would make about {vertices:.2e} vertices, more than \
+             32-bit indices hold ({}); {fit}",
+            u32::MAX
         )));
     }
-    Ok(())
+    let hint = if streams {
+        ""
+    } else {
+        " (or write .stl or .ply, which are streamed to disk)"
+    };
+    Err(MeshError::TooLarge(format!(
+        "meshing at resolution {n} needs about {:.1} GiB but {:.1} GiB are available; \
+         {fit}{hint}",
+        bytes / GIB,
+        avail.unwrap_or(0.0) / GIB,
+    )))
 }
 
 /// Refuses a streamed job whose predicted file would not fit on the disk.
@@ -465,7 +500,7 @@ fn choose_resolution(
             if let Some(b) = best {
                 return Ok(b);
             }
-            check_size(&o, &est, tally_bytes, avail, true)?;
+            check_size(&o, &est, true, avail, true)?;
         }
         let plan = Plan::classified(tape, grid, &o)?;
         let sampled = sampled_volume(&plan);
