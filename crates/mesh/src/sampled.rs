@@ -4,8 +4,9 @@
 //! still lands in them in proportion to their volume.
 //!
 //! Bricks proven full count whole, bricks proven empty count nothing, and
-//! every cell of the other bricks gets one sample at a pseudo-random
-//! (hashed, so deterministic) position inside it: stratified Monte Carlo,
+//! every cell (or block of cells, for large grids) of the other bricks
+//! gets one sample at a pseudo-random (hashed, so deterministic) position
+//! inside it: stratified Monte Carlo,
 //! unbiased whatever the features' size or alignment with the grid (node
 //! counts are not: a face on a node plane counts half a cell too much).
 //! The error is estimated from neighbouring cells' disagreement.
@@ -28,14 +29,24 @@ pub struct SampledVolume {
     pub samples: u64,
 }
 
-/// Per brick: cells proven inside, samples inside, pairs of neighbouring
-/// samples that disagree, samples taken.
+/// Per brick: cells proven inside, cells of the strata sampled inside,
+/// disagreeing neighbour pairs (weighted), samples taken.
 type Counts = [u64; 4];
 
-/// Samples the volume of `plan`'s (clipped) model, one point per cell of
-/// every brick interval analysis could not decide.
+/// Most samples [`sampled_volume`] takes: past this, one sample stands for
+/// a block of `s^3` cells (at a resolution where that block is a small
+/// fraction of any feature the mesh keeps), so the check costs a small
+/// part of the meshing.
+pub const MAX_SAMPLES: f64 = 4.0 * 1024.0 * 1024.0;
+
+/// Samples the volume of `plan`'s (clipped) model: one point per cell, or
+/// per block of cells past [`MAX_SAMPLES`], of every brick interval
+/// analysis could not decide.
 pub fn sampled_volume(plan: &Plan) -> SampledVolume {
     let g = &plan.grid;
+    let undecided = plan.surface_bricks() as f64 * (g.brick as f64).powi(3);
+    // Cells per side of a stratum.
+    let s = ((undecided / MAX_SAMPLES).cbrt().ceil() as usize).clamp(1, g.brick);
     // Integer sums: the total does not depend on the order of the bricks.
     let sum = (0..g.brick_count())
         .into_par_iter()
@@ -59,31 +70,46 @@ pub fn sampled_volume(plan: &Plan) -> SampledVolume {
                         xs.clear();
                         ys.clear();
                         zs.clear();
-                        for k in 0..cells[2] {
-                            for j in 0..cells[1] {
-                                for i in 0..cells[0] {
-                                    let c = [lo[0] + i, lo[1] + j, lo[2] + k];
+                        // Strata of s^3 cells (fewer at the brick's far
+                        // sides); each sample counts for its stratum's cells.
+                        let strata = cells.map(|c| c.div_ceil(s));
+                        let mut weight = Vec::new();
+                        for k in 0..strata[2] {
+                            for j in 0..strata[1] {
+                                for i in 0..strata[0] {
+                                    let c0 = [i * s, j * s, k * s];
+                                    let ext: [usize; 3] =
+                                        std::array::from_fn(|a| s.min(cells[a] - c0[a]));
+                                    let c: [usize; 3] = std::array::from_fn(|a| lo[a] + c0[a]);
                                     let u = jitter(g.node_index(c));
                                     let p: [f64; 3] = std::array::from_fn(|a| {
-                                        g.origin[a] + g.h * (c[a] as f64 + u[a])
+                                        g.origin[a] + g.h * (c[a] as f64 + u[a] * ext[a] as f64)
                                     });
                                     xs.push(p[0] as f32);
                                     ys.push(p[1] as f32);
                                     zs.push(p[2] as f32);
+                                    weight.push((ext[0] * ext[1] * ext[2]) as u64);
                                 }
                             }
                         }
                         let mut v = vec![0.0f32; xs.len()];
                         ev.eval(xs, ys, zs, &mut v);
-                        let inside = v.iter().filter(|&&f| f >= 0.0).count() as u64;
-                        // Pairs of cells along x: (2i, 2i + 1).
+                        let inside: u64 = v
+                            .iter()
+                            .zip(&weight)
+                            .filter(|(&f, _)| f >= 0.0)
+                            .map(|(_, &w)| w)
+                            .sum();
+                        // Pairs of strata along x: (2i, 2i + 1), in units
+                        // of a stratum's squared cell count.
                         let mut differ = 0u64;
-                        for row in v.chunks(cells[0]) {
-                            for pair in row.chunks_exact(2) {
-                                differ += ((pair[0] >= 0.0) != (pair[1] >= 0.0)) as u64;
+                        for (row, w) in v.chunks(strata[0]).zip(weight.chunks(strata[0])) {
+                            for (pair, w) in row.chunks_exact(2).zip(w.chunks_exact(2)) {
+                                let d = (pair[0] >= 0.0) != (pair[1] >= 0.0);
+                                differ += d as u64 * w[0] * w[1];
                             }
                         }
-                        [0, inside, differ, total]
+                        [0, inside, differ, v.len() as u64]
                     }
                 }
             },
@@ -100,8 +126,8 @@ pub fn sampled_volume(plan: &Plan) -> SampledVolume {
     let cell = g.h * g.h * g.h;
     SampledVolume {
         value: (sum[0] + sum[1]) as f64 * cell,
-        // Each disagreeing pair contributes a variance of about 1/2 per
-        // cell pair in units of cells (two Bernoulli samples, p near 1/2).
+        // Each disagreeing pair of strata of w cells contributes a variance
+        // of about w^2 / 2 cells^2 (two Bernoulli samples, p near 1/2).
         error: (sum[2] as f64 * 0.5).sqrt() * cell,
         samples: sum[3],
     }
