@@ -71,8 +71,29 @@ impl Report {
         self.measures.volume.value
     }
 
+    /// The volume's error estimate: the Richardson estimate, or where the
+    /// volume misses part of the sampled volume (features between the
+    /// nodes, see [`Report::missed_volume`]) that difference plus three of
+    /// the sampling's standard deviations.
     pub fn volume_error(&self) -> f64 {
-        self.measures.volume.error()
+        let r = self.measures.volume.error();
+        match self.missed_volume() {
+            Some(d) => r.max(d.abs() + 3.0 * self.measures.sampled_volume_error),
+            None => r,
+        }
+    }
+
+    /// Where the measured volume and the volume sampled at random points
+    /// (see [`Measures::sampled_volume`]) differ by more than three of the
+    /// sampling's standard deviations and the Richardson error together:
+    /// sampled minus measured. Features smaller than a voxel were missed by
+    /// the fine and the coarse grid alike.
+    pub fn missed_volume(&self) -> Option<f64> {
+        let m = &self.measures;
+        let d = m.sampled_volume - m.volume.value;
+        (d.abs() > 3.0 * m.sampled_volume_error + m.volume.error()
+            && d.abs() > 1e-9 * m.region_volume.value.abs())
+        .then_some(d)
     }
 
     /// Volume of the region, or of the bounds.
@@ -163,6 +184,19 @@ impl Report {
             ));
         } else if self.volume() >= self.region_volume() && self.area() <= 0.0 {
             out.push(format!("solid everywhere {within}: no pores, no surface"));
+        }
+        if let Some(d) = self.missed_volume() {
+            let m = &self.measures;
+            out.push(format!(
+                "the volume differs from the model sampled at a random point of every 2^3 \
+                 voxels ({} ± {}) by {} %: features smaller than a voxel ({}) were missed \
+                 (the area, connectivity and thickness miss them too); the volume's ± \
+                 includes the difference; use a finer --resolution",
+                microfrep_io::text::sig(m.sampled_volume, 5),
+                microfrep_io::text::sig(m.sampled_volume_error, 2),
+                microfrep_io::text::sig(100.0 * d / m.sampled_volume.max(f64::MIN_POSITIVE), 3),
+                microfrep_io::text::sig(self.grid.voxel_size(), 4)
+            ));
         }
         out
     }

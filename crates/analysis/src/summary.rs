@@ -57,6 +57,7 @@ pub fn to_json(r: &Report, model: &str, region: Option<&str>) -> Value {
         "area": { "value": r.area(), "error": r.area_error(), "coarse": m.area.coarse },
         "specific_surface": { "value": r.specific_surface(), "error": r.specific_surface_error() },
         "proven_volume": m.proven_volume,
+        "sampled_volume": { "value": m.sampled_volume, "error": m.sampled_volume_error },
         "bricks": { "sampled": m.sampled_bricks, "total": m.bricks },
         "refine_depth": m.refine_depth,
         "creased_cells": m.creased_cells,
