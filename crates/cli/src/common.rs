@@ -1,7 +1,7 @@
 //! What every verb shares: the model options (`MODEL`, `--object`, `-a`,
 //! `--field`, `--bounds`), the run options (`--quiet`, `--json`,
 //! `--threads`), loading with progress, the one rule for the default box,
-//! progress bars and number formatting.
+//! progress bars and error chains.
 
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
@@ -228,10 +228,6 @@ pub fn check_extension(out: &Path, exts: &[&str], what: &str) -> Result<()> {
     Ok(())
 }
 
-/// `v` with 7 significant digits.
-pub fn num(v: f64) -> String {
-    microfrep::io::text::sig(v, 7)
-}
 
 /// An error and its causes on one line, each cause once: errors that
 /// already show their source (an I/O error naming its file) are not

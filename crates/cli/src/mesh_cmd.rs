@@ -1,9 +1,10 @@
 //! `microfrep mesh`: triangle mesh of a model to STL, OBJ, PLY or 3MF.
 
-use crate::common::{frame, load_model, num, ModelArgs, RunArgs};
+use crate::common::{frame, load_model, ModelArgs, RunArgs};
 use anyhow::Result;
 use clap::Args;
-use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions, Summary};
+use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
+use microfrep::mesh::report;
 use microfrep::mesh::{CellMethod, Grid, MeshOptions};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -105,85 +106,11 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let s = s?;
     let secs = start.elapsed().as_secs_f64();
     let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
+    let out = a.output.display().to_string();
     if a.run.json {
-        println!("{}", json(&a, &s, secs, peak));
+        println!("{}", report::to_json(&s, &out, secs, peak));
     } else if !a.run.quiet {
-        print_text(&a, &s, secs, peak);
+        print!("{}", report::to_text(&s, &out, secs, peak));
     }
     Ok(())
-}
-
-fn json(a: &MeshArgs, s: &Summary, secs: f64, peak: f64) -> serde_json::Value {
-    serde_json::json!({
-        "output": a.output.display().to_string(),
-        "resolution": s.resolution,
-        "cells": format!("{:?}", a.cells).to_lowercase(),
-        "cell": s.cell,
-        "triangles": s.triangles,
-        "vertices": s.vertices,
-        "bad_edges": s.bad_edges,
-        "euler": s.euler,
-        "streamed": s.streamed,
-        "volume": s.volume,
-        "area": s.area,
-        "bbox": s.bbox,
-        "seconds": secs,
-        "peak_bytes": peak,
-        "predicted_peak_bytes": s.predicted_bytes,
-        "thin_cells": s.thin_cells,
-        "runtime_errors": s.runtime_errors.as_ref().map(|c| c.errors),
-        "sampled_volume": s.sampled_volume.map(|v| serde_json::json!({"value": v.value, "error": v.error})),
-        "volume_loss": s.volume_loss,
-        "auto": s.trials.iter().map(|t| serde_json::json!({"resolution": t.resolution,
-            "mesh_volume": t.mesh_volume, "sampled_volume": t.sampled.value, "seconds": t.seconds})).collect::<Vec<_>>(),
-    })
-}
-
-fn print_text(a: &MeshArgs, s: &Summary, secs: f64, peak: f64) {
-    const MIB: f64 = 1024.0 * 1024.0;
-    println!("wrote {}", a.output.display());
-    println!(
-        "  grid       {} cells on the longest side, cell {}",
-        s.resolution,
-        num(s.cell)
-    );
-    println!("  triangles  {}", s.triangles);
-    println!("  vertices   {}", s.vertices);
-    match (s.bad_edges, s.euler) {
-        (Some(b), Some(e)) => println!("  bad edges  {b} (euler {e})"),
-        _ => println!("  bad edges  not checked (streamed to disk)"),
-    }
-    match (s.sampled_volume, s.volume_loss) {
-        (Some(v), Some(l)) => println!(
-            "  volume     {} (model {} ± {} sampled: {} % lost)",
-            num(s.volume),
-            num(v.value),
-            microfrep::io::text::sig(v.error, 2),
-            microfrep::io::text::sig(100.0 * l, 2)
-        ),
-        _ => println!("  volume     {}", num(s.volume)),
-    }
-    if !s.trials.is_empty() {
-        let t: Vec<String> = s.trials.iter().map(|t| t.resolution.to_string()).collect();
-        println!("  auto       tried {} cells", t.join(", "));
-    }
-    println!("  area       {}", num(s.area));
-    let bb = |p: [f64; 3]| p.map(num).join(", ");
-    println!("  bbox       [{}] .. [{}]", bb(s.bbox[0]), bb(s.bbox[1]));
-    println!("  time       {secs:.2} s");
-    if let Some(c) = s.runtime_errors.as_ref().filter(|c| c.errors > 0) {
-        println!("  run-time errors at {c}; those nodes count as outside");
-    }
-    if s.thin_cells > 0 {
-        println!(
-            "  note       interval analysis found {} cells that may hold features thinner \
-             than a cell; they are not in the mesh (try a finer resolution)",
-            s.thin_cells
-        );
-    }
-    println!(
-        "  peak mem   {:.1} MiB (predicted {:.1} MiB)",
-        peak / MIB,
-        s.predicted_bytes / MIB
-    );
 }

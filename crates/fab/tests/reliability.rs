@@ -117,8 +117,8 @@ proptest! {
             prop_assert!(g.nx >= 1 && g.ny >= 1 && g.layers >= 1);
         }
         if let Ok(v) = VoxelGrid::new(lo, hi, pixel) {
-            for a in 0..3 {
-                prop_assert!(v.origin[a] <= hi[a], "{:?}", v);
+            for (o, h) in v.origin.iter().zip(hi) {
+                prop_assert!(*o <= h, "{:?}", v);
             }
         }
     }

@@ -95,6 +95,8 @@ pub struct Trial {
 pub struct Summary {
     /// Cells on the longest side.
     pub resolution: usize,
+    /// The cell method.
+    pub cells: crate::CellMethod,
     /// Cell size.
     pub cell: f64,
     /// Triangles written.
@@ -226,6 +228,7 @@ fn summary_of(
 ) -> Summary {
     Summary {
         resolution: opts.resolution,
+        cells: opts.cells,
         cell: plan.grid.h,
         triangles: t.triangles,
         vertices: t.vertices,

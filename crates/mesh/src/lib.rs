@@ -34,6 +34,7 @@ pub mod job;
 pub mod memory;
 mod pipeline;
 mod refine;
+pub mod report;
 pub mod sampled;
 pub mod sink;
 pub mod tets;
