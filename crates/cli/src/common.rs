@@ -228,7 +228,6 @@ pub fn check_extension(out: &Path, exts: &[&str], what: &str) -> Result<()> {
     Ok(())
 }
 
-
 /// An error and its causes on one line, each cause once: errors that
 /// already show their source (an I/O error naming its file) are not
 /// followed by the same text again.
@@ -242,4 +241,43 @@ pub fn chain(e: &anyhow::Error) -> String {
         }
     }
     msg
+}
+
+/// Fails before any work when a HyperFun loop of the model runs to its
+/// iteration limit at one of a few probe points of the box `b` (a model
+/// that does not terminate; see [`check_terminates`]).
+pub fn probe_terminates(m: &Loaded, b: [[f64; 3]; 2]) -> Result<()> {
+    if m.hyperfun.is_some() {
+        let mut pe = m.shape.point();
+        for p in microfrep::io::precision::probe_points(b[0], b[1], 64) {
+            pe.eval(p);
+        }
+    }
+    check_terminates(m, &[])
+}
+
+/// Fails when a HyperFun loop of the model ran to its iteration limit at a
+/// point the job sampled: from then on every evaluation of the model fails
+/// at once, so the values depend on the order of evaluation. `outputs`
+/// (written from such values) are removed.
+pub fn check_terminates(m: &Loaded, outputs: &[&Path]) -> Result<()> {
+    if let Some(e) = m.hyperfun.as_ref().and_then(|h| h.runaway_loop()) {
+        for p in outputs {
+            let _ = if p.is_dir() {
+                std::fs::remove_dir_all(p)
+            } else {
+                std::fs::remove_file(p)
+            };
+        }
+        let removed = if outputs.is_empty() {
+            ""
+        } else {
+            "; the output was removed"
+        };
+        bail!(
+            "the model does not terminate everywhere: {e}; values sampled before and after \
+             it differ{removed}"
+        );
+    }
+    Ok(())
 }

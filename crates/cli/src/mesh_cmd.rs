@@ -1,6 +1,6 @@
 //! `microfrep mesh`: triangle mesh of a model to STL, OBJ, PLY or 3MF.
 
-use crate::common::{frame, load_model, ModelArgs, RunArgs};
+use crate::common::{check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs};
 use anyhow::Result;
 use clap::Args;
 use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
@@ -71,6 +71,7 @@ pub fn run(a: MeshArgs) -> Result<()> {
     microfrep::mesh::write::format_of(&a.output)?;
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?.corners();
+    probe_terminates(&m, b)?;
     let (resolution, auto) = match (a.resolution, a.voxel) {
         (Some(Resolution::Cells(n)), _) => (n, None),
         (Some(Resolution::Auto), _) => (0, Some(AutoOptions::default())),
@@ -104,6 +105,7 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let s = mesh_to_file(&m.shape, &opts, &a.output, &job, &progress);
     bar.finish_and_clear();
     let s = s?;
+    check_terminates(&m, &[&a.output])?;
     let secs = start.elapsed().as_secs_f64();
     let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
     let out = a.output.display().to_string();

@@ -1,6 +1,6 @@
 //! `microfrep slice`: layer images, SVG contours or a CLI file.
 
-use crate::common::{frame, load_model, ModelArgs, RunArgs};
+use crate::common::{check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs};
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use microfrep::fab::{write_stack, Format, SliceGrid};
@@ -48,12 +48,15 @@ pub fn run(a: SliceArgs) -> Result<()> {
     };
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?;
+    probe_terminates(&m, b.corners())?;
     let grid = SliceGrid::new(b.min, b.max, a.layer, a.pixel)?;
     let bar = a.run.bar("layers");
     bar.set_message("slicing");
     bar.set_length(grid.layers as u64);
-    write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1))?;
+    let written = write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1));
     bar.finish_and_clear();
+    written?;
+    check_terminates(&m, &[&a.output])?;
     // Run-time errors at the pixel centres: those pixels are NaN (empty).
     let xs: Vec<f64> = (0..grid.nx).map(|i| grid.x(i)).collect();
     let ys: Vec<f64> = (0..grid.ny).map(|j| grid.y(j)).collect();

@@ -465,6 +465,35 @@ fn empty_results_are_errors_that_say_why_and_write_nothing() {
     assert!(t.stdout.contains("no solid"), "{}", t.stdout);
 }
 
+#[test]
+fn a_model_that_does_not_terminate_everywhere_writes_nothing() {
+    // The loop runs forever where x > 0.3 (HyperFun stops it at its
+    // iteration budget, and from then on the model fails at once).
+    let d = dir("runaway");
+    let p = d.join("run.hf");
+    std::fs::write(
+        &p,
+        "my_model(x[3], a[1]) { t = x[1]; while t > 0.3 loop t = t + 1; endloop;\n\
+         my_model = 1 - x[1]^2 - x[2]^2 - x[3]^2; }\n",
+    )
+    .unwrap();
+    let m = p.display().to_string();
+    let b = "--bounds=-1,-1,-1,1,1,1";
+    let o = |n: &str| d.join(n).display().to_string();
+    let (stl, sl, raw) = (o("r.stl"), o("sl"), o("r.raw"));
+    for args in [
+        vec!["mesh", &m, b, "--resolution", "32", "-o", &stl],
+        vec![
+            "slice", &m, b, "--layer", "0.1", "--pixel", "0.05", "-o", &sl,
+        ],
+        vec!["voxels", &m, b, "--voxel", "0.1", "-o", &raw],
+        vec!["analyze", &m, b, "--resolution", "16"],
+    ] {
+        assert_clear_error(&run(&args), "does not terminate");
+    }
+    assert_eq!(entries(&d), vec!["run.hf".to_string()]);
+}
+
 /// Sends `sig` to `child` and waits for it to end.
 fn signal(child: &mut Child, sig: &str) -> std::process::ExitStatus {
     let pid = child.id().to_string();
