@@ -54,9 +54,9 @@ impl Default for JobOptions {
 
 /// How `--resolution auto` searches: from `start` cells up by factors of
 /// 1.5 until the mesh's volume agrees with the sampled volume within
-/// `tolerance` (plus twice the sampling's own error) and changed by less
-/// than twice `tolerance` since the previous step, or `max` cells (or the
-/// memory) are reached.
+/// `tolerance` (the difference plus twice the sampling's own error) and
+/// changed by less than twice `tolerance` since the previous step, or
+/// `max` cells (or the memory) are reached.
 #[derive(Clone, Copy, Debug)]
 pub struct AutoOptions {
     /// First resolution tried.
@@ -534,7 +534,9 @@ fn choose_resolution(
             // Nothing to resolve (the empty mesh is reported later).
             volume <= 0.0
         } else {
-            let agrees = ((v - volume) / v).abs() <= auto.tolerance + 2.0 * sampled.error / v;
+            // The difference, with the sampling's uncertainty, within the
+            // tolerance; and the mesh's volume settled since the last step.
+            let agrees = (v - volume).abs() + 2.0 * sampled.error <= auto.tolerance * v;
             let settled = prev.is_some_and(|p| ((volume - p) / v).abs() <= 2.0 * auto.tolerance);
             agrees && settled
         };

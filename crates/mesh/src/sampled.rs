@@ -100,15 +100,8 @@ pub fn sampled_volume(plan: &Plan) -> SampledVolume {
                             .filter(|(&f, _)| f >= 0.0)
                             .map(|(_, &w)| w)
                             .sum();
-                        // Pairs of strata along x: (2i, 2i + 1), in units
-                        // of a stratum's squared cell count.
-                        let mut differ = 0u64;
-                        for (row, w) in v.chunks(strata[0]).zip(weight.chunks(strata[0])) {
-                            for (pair, w) in row.chunks_exact(2).zip(w.chunks_exact(2)) {
-                                let d = (pair[0] >= 0.0) != (pair[1] >= 0.0);
-                                differ += d as u64 * w[0] * w[1];
-                            }
-                        }
+                        let ins: Vec<bool> = v.iter().map(|&f| f >= 0.0).collect();
+                        let differ = pair_variance(&ins, &weight, strata);
                         [0, inside, differ, v.len() as u64]
                     }
                 }
@@ -131,6 +124,36 @@ pub fn sampled_volume(plan: &Plan) -> SampledVolume {
         error: (sum[2] as f64 * 0.5).sqrt() * cell,
         samples: sum[3],
     }
+}
+
+/// Twice the variance, in cells^2, that neighbouring strata disagreeing
+/// reveal: strata paired (2i, 2i + 1) along each axis in turn, each
+/// disagreeing pair of strata of `w` cells adding `w^2`; the largest of
+/// the three axes (a surface parallel to an axis shows only in the pairs
+/// across it).
+fn pair_variance(inside: &[bool], w: &[u64], strata: [usize; 3]) -> u64 {
+    let idx = |i: usize, j: usize, k: usize| i + strata[0] * (j + strata[1] * k);
+    let mut best = 0;
+    for axis in 0..3 {
+        let mut sum = 0u64;
+        for k in 0..strata[2] {
+            for j in 0..strata[1] {
+                for i in 0..strata[0] {
+                    let c = [i, j, k];
+                    if c[axis] % 2 == 1 {
+                        let mut o = c;
+                        o[axis] -= 1;
+                        let (a, b) = (idx(i, j, k), idx(o[0], o[1], o[2]));
+                        if inside[a] != inside[b] {
+                            sum += w[a] * w[b];
+                        }
+                    }
+                }
+            }
+        }
+        best = best.max(sum);
+    }
+    best
 }
 
 /// A point in the unit cube from a cell's index (splitmix64 with a fixed
