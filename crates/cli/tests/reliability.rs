@@ -209,6 +209,42 @@ fn large_jobs_under_a_small_address_space_fail_clearly_before_allocating() {
         quick,
     );
     assert_clear_error(&o, "measuring a grid");
+    // Slices and voxels: one layer of 16000^2 pixels is 2.4 GiB in flight.
+    let sl = d.join("sl").display().to_string();
+    let o = run_with(
+        &[
+            "slice",
+            "sphere",
+            "-o",
+            &sl,
+            "--layer",
+            "0.5",
+            "--pixel",
+            "0.000125",
+            "--threads",
+            "2",
+        ],
+        Some(1500 << 10),
+        quick,
+    );
+    assert_clear_error(&o, "coarser --pixel");
+    let raw = d.join("v.raw").display().to_string();
+    let o = run_with(
+        &[
+            "voxels",
+            "sphere",
+            "-o",
+            &raw,
+            "--voxel",
+            "0.000125",
+            "--bounds=-1,-1,-1e-4,1,1,1e-4",
+            "--threads",
+            "2",
+        ],
+        Some(1500 << 10),
+        quick,
+    );
+    assert_clear_error(&o, "coarser --voxel");
     assert!(entries(&d).is_empty(), "{:?}", entries(&d));
 }
 

@@ -6,6 +6,9 @@ pub enum FabError {
     /// Bad parameters (no underlying error).
     #[error("invalid parameters: {0}")]
     Invalid(String),
+    /// The job would not fit in the memory the process may use.
+    #[error("{0}")]
+    TooLarge(String),
     /// f32 sampling cannot resolve the model (its values underflow or
     /// overflow in f32); the message says where.
     #[error("cannot sample this model: {0}")]

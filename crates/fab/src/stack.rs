@@ -153,7 +153,7 @@ pub fn write_stack(
     } else {
         Target::Dir(AtomicDir::create(out)?)
     };
-    let batch = 2 * rayon::current_num_threads();
+    let batch = layers_in_flight(grid, microfrep_io::limits::memory_limit())?;
     let mut solid = 0u64;
     for start in (0..grid.layers).step_by(batch) {
         let end = (start + batch).min(grid.layers);
@@ -198,6 +198,35 @@ pub fn write_stack(
     }
     Ok(())
 }
+
+/// Bytes per pixel of a layer being made: its values (4), its image or
+/// coverage (1 to 2) and encoded bytes, with slack for contours.
+const BYTES_PER_PIXEL: f64 = 10.0;
+
+/// Layers computed at once: two per thread, fewer when their images would
+/// not fit `limit` bytes (with a fifth kept free); an error when one layer
+/// alone does not fit.
+pub fn layers_in_flight(grid: &SliceGrid, limit: Option<f64>) -> Result<usize> {
+    let per_layer = BYTES_PER_PIXEL * (grid.nx * grid.ny) as f64 + 1e6;
+    let want = 2 * rayon::current_num_threads();
+    let Some(limit) = limit else {
+        return Ok(want);
+    };
+    let fit = (0.8 * limit / per_layer).floor();
+    if fit < 1.0 {
+        return Err(crate::FabError::TooLarge(format!(
+            "a layer of {} x {} pixels needs about {:.0} MiB but {:.0} MiB are available; use a \
+             coarser --pixel",
+            grid.nx,
+            grid.ny,
+            per_layer / MIB,
+            limit / MIB
+        )));
+    }
+    Ok(want.min(fit as usize))
+}
+
+const MIB: f64 = 1024.0 * 1024.0;
 
 /// The bytes one layer contributes: a PNG, an SVG or a CLI layer block.
 fn layer_payload(

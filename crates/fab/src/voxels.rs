@@ -95,6 +95,18 @@ pub fn write_voxels(shape: &Shape, grid: &VoxelGrid, field: bool, out: &Path) ->
     let lo = grid.origin.map(|o| o - 0.5 * s);
     let hi: [f64; 3] = std::array::from_fn(|a| lo[a] + grid.dims[a] as f64 * s);
     crate::grid::check_precision(shape, lo, hi)?;
+    // One z-layer at a time: its values (4 bytes a voxel) and its bytes.
+    let layer = (grid.dims[0] * grid.dims[1]) as f64 * (4.0 + if field { 4.0 } else { 1.0 });
+    if let Some(m) = microfrep_io::limits::memory_limit().filter(|&m| layer > 0.8 * m) {
+        return Err(FabError::TooLarge(format!(
+            "a layer of {} x {} voxels needs about {:.0} MiB but {:.0} MiB are available; use \
+             a coarser --voxel",
+            grid.dims[0],
+            grid.dims[1],
+            layer / (1024.0 * 1024.0),
+            m / (1024.0 * 1024.0)
+        )));
+    }
     let mut f = AtomicFile::create(out)?;
     let inside = write_into(shape, grid, field, format, &mut f).map_err(io_at(out))?;
     if inside == 0 {

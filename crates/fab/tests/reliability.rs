@@ -44,6 +44,23 @@ fn steps_larger_than_the_box_and_far_boxes_are_refused() {
 }
 
 #[test]
+fn layers_in_flight_fit_the_memory() {
+    let g = SliceGrid::new([0.0; 3], [1.0; 3], 0.5, 1.0 / 8000.0).unwrap();
+    // 64 M pixels: about 640 MB a layer.
+    assert_eq!(
+        microfrep_fab::stack::layers_in_flight(&g, Some(1.7e9)).unwrap(),
+        2
+    );
+    let e = microfrep_fab::stack::layers_in_flight(&g, Some(5e8)).unwrap_err();
+    assert!(
+        matches!(e, FabError::TooLarge(_)) && e.to_string().contains("coarser"),
+        "{e}"
+    );
+    let n = microfrep_fab::stack::layers_in_flight(&g, None).unwrap();
+    assert_eq!(n, 2 * rayon::current_num_threads());
+}
+
+#[test]
 fn empty_stacks_and_voxel_files_are_errors_and_write_nothing() {
     let d = dir("empty");
     // A slab between the layer heights, and a ball outside the box.
