@@ -92,7 +92,7 @@ const CHUNK: usize = 4096;
 
 /// Peak bytes of [`measure`] on `grid` beyond the model: a bit per brick
 /// (which need refining), a chunk of brick results, and each thread's
-/// buffers (a brick's samples and up to [`LEAF_BATCH`] cells waiting to be
+/// buffers (a brick's samples and a batch of cells waiting to be
 /// measured, with their edges' roots).
 pub fn predict_bytes(grid: &Grid) -> f64 {
     let nb: f64 = grid
