@@ -123,7 +123,7 @@ impl PyShape {
         opts.cells = self::cells(cells)?;
         let job = JobOptions {
             stream,
-            memory_limit: None,
+            ..JobOptions::default()
         };
         let shape = self.s.clone();
         let s = py
@@ -286,7 +286,10 @@ impl PyShape {
         let bytes: Vec<Vec<u8>> = py.allow_threads(|| {
             (k0..k1)
                 .into_par_iter()
-                .map(|k| f.layer(&shape, &g, k, &out.join(f.layer_name(k))))
+                .map(|k| {
+                    f.layer(&shape, &g, k, &out.join(f.layer_name(k)))
+                        .map(|(b, _)| b)
+                })
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(errors::fab)
         })?;

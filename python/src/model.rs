@@ -3,8 +3,8 @@
 
 use crate::errors;
 use microfrep::core::frep::{self, Blend};
-use microfrep::shapes as prims;
 use microfrep::core::Expr;
+use microfrep::shapes as prims;
 use microfrep::structures::density::{DensitySolver, LevelTable, STRUT_CELLS, TPMS_CELLS};
 use microfrep::structures::struts::{strut_lattice, StrutLattice};
 use microfrep::structures::tpms::{tpms, Solid, Tpms};
@@ -368,7 +368,7 @@ fn axis_of(a: usize) -> PyResult<usize> {
     Ok(a)
 }
 
-/// Primitives of `microfrep_core::prims` (HyperFun's hf* forms).
+/// Primitives of `microfrep::shapes` (HyperFun's hf* forms).
 #[pyfunction]
 #[pyo3(signature = (name, c, v=None, axis=0, r=None, r2=None))]
 fn primitive(

@@ -15,21 +15,26 @@ use pyo3::types::PyDict;
 
 type Box3 = ([f64; 3], [f64; 3]);
 
-/// Brick measures as arrays: ids (u64), values (n x 9: volume, region,
-/// area, each value, coarse, kink), sampled flags (u8).
+/// Brick measures as arrays: ids (u64), values (n x 11: volume, region,
+/// area, each value, coarse, kink; then the sampled volume and its
+/// variance), sampled flags (u8).
 type BrickArrays<'py> = (
     Bound<'py, PyArray1<u64>>,
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<u8>>,
 );
 
+/// Values per brick in the value arrays.
+const PER_BRICK: usize = 11;
+
 fn to_arrays<'py>(py: Python<'py>, b: &[BrickMeasures]) -> BrickArrays<'py> {
     let ids: Vec<u64> = b.iter().map(|m| m.brick as u64).collect();
-    let mut vals = Vec::with_capacity(9 * b.len());
+    let mut vals = Vec::with_capacity(PER_BRICK * b.len());
     for m in b {
         for e in [m.volume, m.region, m.area] {
             vals.extend([e.value, e.coarse, e.kink_diff]);
         }
+        vals.extend(m.sampled_volume);
     }
     let s: Vec<u8> = b.iter().map(|m| m.sampled as u8).collect();
     (
@@ -45,7 +50,7 @@ fn from_arrays(
     sampled: &PyReadonlyArray1<u8>,
 ) -> PyResult<Vec<BrickMeasures>> {
     let (ids, vals, s) = (ids.as_slice()?, vals.as_slice()?, sampled.as_slice()?);
-    if vals.len() != 9 * ids.len() || s.len() != ids.len() {
+    if vals.len() != PER_BRICK * ids.len() || s.len() != ids.len() {
         return Err(errors::input("brick arrays differ in length"));
     }
     let est = |v: &[f64]| Estimate {
@@ -57,13 +62,14 @@ fn from_arrays(
         .iter()
         .enumerate()
         .map(|(i, &b)| {
-            let v = &vals[9 * i..9 * i + 9];
+            let v = &vals[PER_BRICK * i..PER_BRICK * (i + 1)];
             BrickMeasures {
                 brick: b as usize,
                 volume: est(&v[0..3]),
                 region: est(&v[3..6]),
                 area: est(&v[6..9]),
                 sampled: s[i] != 0,
+                sampled_volume: [v[9], v[10]],
             }
         })
         .collect())
@@ -277,6 +283,7 @@ fn analysis_merge(
         measures,
         connectivity,
         thickness: None,
+        attributes: Vec::new(),
         seconds,
     };
     Ok(to_json(&report, name, region_name).to_string())

@@ -80,3 +80,12 @@ def test_existing_output_is_not_overwritten(tmp_path):
     out.mkdir()
     with pytest.raises(mf.Error, match="exists"):
         mf.sphere().slice_to(out, layer=0.5, pixel=0.1)
+
+
+def test_a_mesh_that_loses_thin_features_is_refused_and_nothing_written(tmp_path):
+    # At resolution 64 the tori-ball block's bars fall between the samples
+    # (12 % of the volume is lost); the job refuses instead of writing it.
+    out = tmp_path / "t.stl"
+    with pytest.raises(mf.MeshError, match="finer --resolution"):
+        mf.load("toriball").mesh_to_file(out, resolution=64)
+    assert not out.exists()

@@ -50,12 +50,13 @@ impl Connectivity {
         2 * self.euler
     }
 
-    /// Fraction of the pore volume connected to the outside (1 without pores).
+    /// Fraction of the pore volume connected to the outside; NaN
+    /// (undefined) without pores.
     pub fn open_pore_fraction(&self) -> f64 {
         if self.pore_volume > 0.0 {
             self.open_pore_volume / self.pore_volume
         } else {
-            1.0
+            f64::NAN
         }
     }
 }

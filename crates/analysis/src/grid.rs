@@ -77,7 +77,12 @@ impl Grid {
             let n = (ext[a] / h).round().max(1.0) as usize;
             n + n % 2
         });
-        let step = std::array::from_fn(|a| ext[a] / dims[a] as f64);
+        let step: [f64; 3] = std::array::from_fn(|a| ext[a] / dims[a] as f64);
+        // f32 samples must resolve the voxels everywhere in the box.
+        let finest = step.iter().cloned().fold(f64::INFINITY, f64::min);
+        microfrep_io::precision::check_grid(lo, hi, finest).map_err(|e| {
+            AnalysisError::Input(format!("cannot sample at resolution {resolution}: {e}"))
+        })?;
         Ok(Grid { lo, hi, dims, step })
     }
 

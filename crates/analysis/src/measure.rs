@@ -53,6 +53,12 @@ pub struct Measures {
     pub area: Estimate,
     /// Volume of the bricks proven full or empty by intervals, exact.
     pub proven_volume: f64,
+    /// The solid volume by one sample at a random point of every block of
+    /// 2 x 2 x 2 voxels (stratified Monte Carlo, unbiased however small the
+    /// features), and its standard deviation: a check on `volume`, which
+    /// misses features that fall between the grid's nodes.
+    pub sampled_volume: f64,
+    pub sampled_volume_error: f64,
     /// Bricks sampled, of all.
     pub sampled_bricks: usize,
     /// Halvings of the cells around creases (see [`MAX_DEPTH`]).
@@ -80,22 +86,72 @@ pub(crate) struct Scratch {
     pub(crate) root_vals: Vec<f32>,
 }
 
+/// Bricks measured per step of [`measure`]: their results are summed (in
+/// brick order) and dropped, so the memory does not grow with the grid.
+const CHUNK: usize = 4096;
+
+/// Peak bytes of [`measure`] on `grid` beyond the model: a bit per brick
+/// (which need refining), a chunk of brick results, and each thread's
+/// buffers (a brick's samples and a batch of cells waiting to be
+/// measured, with their edges' roots).
+pub fn predict_bytes(grid: &Grid) -> f64 {
+    let nb: f64 = grid
+        .dims
+        .iter()
+        .map(|&d| d.div_ceil(BRICK) as f64)
+        .product();
+    let nodes = ((BRICK + 1) as f64).powi(3);
+    let per_thread = nodes * (3.0 * 4.0 + 2.0 * 4.0 + 2.0 * 24.0)
+        + LEAF_BATCH as f64 * (std::mem::size_of::<Leaf>() as f64 + 19.0 * 2.0 * (4.0 + 40.0));
+    nb / 8.0
+        + CHUNK as f64 * std::mem::size_of::<Part>() as f64
+        + rayon::current_num_threads() as f64 * per_thread
+        + 16e6
+}
+
 /// Measures the solid `f >= 0` (inside `region >= 0` when given) on `grid`.
 /// `progress(done, total)` counts bricks.
 pub fn measure(solid: &Shape, region: Option<&Shape>, grid: &Grid, progress: Progress) -> Measures {
     let (solid, region) = (solid.tape(), region.map(|r| r.tape()));
     let nb = grid.dims.map(|d| d.div_ceil(BRICK));
     let total = nb[0] * nb[1] * nb[2];
+    let mut m = Measures {
+        bricks: total,
+        ..Measures::default()
+    };
+    let add = |m: &mut Measures, p: &Part| {
+        m.volume.add(p.volume);
+        m.region_volume.add(p.region);
+        m.area.add(p.area);
+        if p.sampled {
+            m.sampled_bricks += 1;
+        } else {
+            m.proven_volume += p.region.value;
+        }
+    };
     // First pass: measure the bricks without creased cells, count the
-    // creased cells of the others; then measure those at the deepest depth
-    // the budget allows (one depth for the whole grid keeps the fine and
-    // coarse estimates comparable).
-    let all: Vec<usize> = (0..total).collect();
-    let first = pass(solid, region, grid, 0, true, &all, &|d, _| {
-        progress(d, 2 * total)
-    });
-    let creased: usize = first.iter().map(|p| p.creased).sum();
-    let nodes: usize = first.iter().map(|p| p.nodes).sum();
+    // creased cells of the others (marked in `redo`); then measure those
+    // at the deepest depth the budget allows (one depth for the whole grid
+    // keeps the fine and coarse estimates comparable).
+    let mut redo = vec![0u64; total.div_ceil(64)];
+    let (mut creased, mut nodes) = (0usize, 0usize);
+    for start in (0..total).step_by(CHUNK) {
+        let which: Vec<usize> = (start..(start + CHUNK).min(total)).collect();
+        let parts = pass(solid, region, grid, 0, true, true, &which, &|d, _| {
+            progress(start + d, 2 * total)
+        });
+        for (&b, p) in which.iter().zip(&parts) {
+            creased += p.creased;
+            nodes += p.nodes;
+            m.sampled_volume += p.jitter[0];
+            m.sampled_volume_error += p.jitter[1];
+            if p.creased > 0 {
+                redo[b / 64] |= 1 << (b % 64);
+            } else {
+                add(&mut m, p);
+            }
+        }
+    }
     let budget = REFINE_BUDGET * nodes as f64;
     let mut depth = 0;
     let mut cost = 0.0;
@@ -109,31 +165,24 @@ pub fn measure(solid: &Shape, region: Option<&Shape>, grid: &Grid, progress: Pro
         depth = d;
     }
     // Bricks without creased cells measure the same at any depth.
-    let redo: Vec<usize> = (0..total).filter(|&b| first[b].creased > 0).collect();
-    let mut parts = first;
-    let again = pass(solid, region, grid, depth, false, &redo, &|d, _| {
-        progress(total + d, 2 * total)
-    });
-    for (&b, p) in redo.iter().zip(again) {
-        parts[b] = p;
+    let is_redo = |b: usize| redo[b / 64] >> (b % 64) & 1 == 1;
+    for start in (0..total).step_by(CHUNK) {
+        let which: Vec<usize> = (start..(start + CHUNK).min(total))
+            .filter(|&b| is_redo(b))
+            .collect();
+        if which.is_empty() {
+            continue;
+        }
+        let parts = pass(solid, region, grid, depth, false, false, &which, &|_, _| {});
+        for p in &parts {
+            add(&mut m, p);
+        }
+        progress(total + (start + CHUNK).min(total), 2 * total);
     }
     progress(2 * total, 2 * total);
-    let mut m = Measures {
-        bricks: total,
-        refine_depth: depth,
-        creased_cells: creased,
-        ..Measures::default()
-    };
-    for p in &parts {
-        m.volume.add(p.volume);
-        m.region_volume.add(p.region);
-        m.area.add(p.area);
-        if p.sampled {
-            m.sampled_bricks += 1;
-        } else {
-            m.proven_volume += p.region.value;
-        }
-    }
+    m.sampled_volume_error = m.sampled_volume_error.sqrt();
+    m.refine_depth = depth;
+    m.creased_cells = creased;
     m
 }
 
@@ -144,6 +193,7 @@ pub(crate) fn pass(
     grid: &Grid,
     depth: u32,
     survey: bool,
+    sample: bool,
     which: &[usize],
     progress: Progress,
 ) -> Vec<Part> {
@@ -170,7 +220,7 @@ pub(crate) fn pass(
                 let bi = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
                 let lo = bi.map(|v| v * BRICK);
                 let hi: [usize; 3] = std::array::from_fn(|a| (lo[a] + BRICK).min(grid.dims[a]));
-                let part = brick(grid, s, lo, hi, depth, survey);
+                let part = brick(grid, s, lo, hi, depth, survey, sample);
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if d & 63 == 0 {
                     progress(d, total);
@@ -186,6 +236,9 @@ pub(crate) struct Part {
     pub(crate) volume: Estimate,
     pub(crate) region: Estimate,
     pub(crate) area: Estimate,
+    /// The solid volume by one random sample per block of 2^3 voxels (see
+    /// [`Measures::sampled_volume`]), and that estimate's variance.
+    pub(crate) jitter: [f64; 2],
     pub(crate) sampled: bool,
     /// Top-level cells found creased, and points sampled.
     pub(crate) creased: usize,
@@ -194,7 +247,8 @@ pub(crate) struct Part {
 
 /// Measures of the voxels `lo..hi`.
 /// With `survey`, bricks with creased cells are only counted (their
-/// measures are left for a second pass); the others are measured.
+/// measures are left for a second pass); the others are measured. With
+/// `sample`, the brick's sampled volume ([`Part::jitter`]) is measured too.
 fn brick(
     g: &Grid,
     s: &mut Scratch,
@@ -202,6 +256,7 @@ fn brick(
     hi: [usize; 3],
     max_depth: u32,
     survey: bool,
+    sample: bool,
 ) -> Part {
     let p0 = g.node(lo);
     let p1 = g.node(hi);
@@ -219,9 +274,15 @@ fn brick(
         return Part {
             volume: Estimate::exact(v),
             region: Estimate::exact(bv),
+            jitter: [v, 0.0],
             ..Part::default()
         };
     }
+    let jitter = if sample {
+        jitter_volume(g, s, lo, hi, solid, region)
+    } else {
+        [0.0; 2]
+    };
     // Sample the (n+1)^3 nodes.
     let nn: [usize; 3] = std::array::from_fn(|a| hi[a] - lo[a] + 1);
     s.xs.clear();
@@ -276,7 +337,98 @@ fn brick(
     }
     part.creased = ctx.creased;
     part.nodes = len;
+    part.jitter = jitter;
     part
+}
+
+/// The solid volume of the voxels `lo..hi` (inside the region) by one
+/// sample at a hashed random point of every block of 2 x 2 x 2 voxels, and
+/// its variance (from pairs of neighbouring blocks that disagree): a
+/// measure that no feature escapes by lying between the nodes, against
+/// which [`crate::report::Report::notes`] checks the volume.
+fn jitter_volume(
+    g: &Grid,
+    s: &mut Scratch,
+    lo: [usize; 3],
+    hi: [usize; 3],
+    solid: Class,
+    region: Class,
+) -> [f64; 2] {
+    let blocks: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a]).div_ceil(2));
+    s.xs.clear();
+    s.ys.clear();
+    s.zs.clear();
+    let mut vol = Vec::with_capacity(blocks.iter().product());
+    for k in 0..blocks[2] {
+        for j in 0..blocks[1] {
+            for i in 0..blocks[0] {
+                let v0 = [lo[0] + 2 * i, lo[1] + 2 * j, lo[2] + 2 * k];
+                let n: [usize; 3] = std::array::from_fn(|a| 2.min(hi[a] - v0[a]));
+                let key = (v0[0] as u64) | (v0[1] as u64) << 21 | (v0[2] as u64) << 42;
+                let u = hash3(key);
+                let p: [f64; 3] = std::array::from_fn(|a| {
+                    g.lo[a] + g.step[a] * (v0[a] as f64 + u[a] * n[a] as f64)
+                });
+                s.xs.push(p[0] as f32);
+                s.ys.push(p[1] as f32);
+                s.zs.push(p[2] as f32);
+                vol.push((0..3).map(|a| n[a] as f64 * g.step[a]).product::<f64>());
+            }
+        }
+    }
+    let len = s.xs.len();
+    s.f.resize(len, 0.0);
+    s.r.resize(len, 1.0);
+    match solid {
+        Class::Mixed => s.solid_ev.eval(&s.xs, &s.ys, &s.zs, &mut s.f),
+        Class::Full => s.f.fill(1.0),
+        Class::Empty => s.f.fill(-1.0),
+    }
+    match (&mut s.region_ev, region) {
+        (Some(ev), Class::Mixed) => ev.eval(&s.xs, &s.ys, &s.zs, &mut s.r),
+        _ => s.r.fill(1.0),
+    }
+    let inside = |q: usize| s.f[q] >= 0.0 && s.r[q] >= 0.0;
+    let total: f64 = (0..len).filter(|&q| inside(q)).map(|q| vol[q]).sum();
+    // Blocks paired (2i, 2i + 1) along each axis in turn; a disagreeing
+    // pair adds about half the product of their volumes to the variance.
+    // The largest of the three axes (a surface parallel to an axis shows
+    // only in the pairs across it).
+    let idx = |c: [usize; 3]| c[0] + blocks[0] * (c[1] + blocks[1] * c[2]);
+    let mut var = 0.0f64;
+    for axis in 0..3 {
+        let mut sum = 0.0;
+        for k in 0..blocks[2] {
+            for j in 0..blocks[1] {
+                for i in 0..blocks[0] {
+                    let c = [i, j, k];
+                    if c[axis] % 2 == 1 {
+                        let mut o = c;
+                        o[axis] -= 1;
+                        let (a, b) = (idx(c), idx(o));
+                        if inside(a) != inside(b) {
+                            sum += 0.5 * vol[a] * vol[b];
+                        }
+                    }
+                }
+            }
+        }
+        var = var.max(sum);
+    }
+    [total, var]
+}
+
+/// A point of the unit cube from a key (splitmix64): deterministic.
+fn hash3(key: u64) -> [f64; 3] {
+    let mut z = key.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x2545_F491_4F6C_DD1D;
+    std::array::from_fn(|_| {
+        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut x = z;
+        x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        x ^= x >> 31;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    })
 }
 
 /// Measures of the sampled brick's cells (node counts `n`), each coarse cell
@@ -351,7 +503,13 @@ fn cells(g: &Grid, ctx: &mut Ctx, lo: [usize; 3], n: [usize; 3], centers: &[[f64
         measure_leaves(ctx);
     }
     for (g, &(refined, creased)) in groups.iter().enumerate() {
-        let (coarse, fine) = (ctx.slots[2 * g], ctx.slots[2 * g + 1]);
+        let (mut coarse, mut fine) = (ctx.slots[2 * g], ctx.slots[2 * g + 1]);
+        // A cell holds no less than no solid and no more than its region
+        // (the curvature corrections of features below the voxel size can
+        // overshoot either way).
+        for m in [&mut coarse, &mut fine] {
+            m[0] = m[0].clamp(0.0, m[1].max(0.0));
+        }
         for (q, e) in [&mut part.volume, &mut part.region, &mut part.area]
             .into_iter()
             .enumerate()

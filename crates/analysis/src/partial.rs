@@ -28,7 +28,8 @@
 //!
 //! ```
 //! use microfrep_analysis::{partial, measure, connectivity, Grid, Sampler};
-//! use microfrep_core::{prims, Expr, Shape};
+//! use microfrep_core::{Expr, Shape};
+//! use microfrep_shapes as prims;
 //! let ball = Shape::new(prims::sphere(&Expr::xyz(), &prims::v3([0.0; 3]), 0.8));
 //! let grid = Grid::new([[-1.0; 3], [1.0; 3]], 32).unwrap();
 //! // Two slabs of 16 layers.
@@ -81,6 +82,9 @@ pub struct BrickMeasures {
     pub area: Estimate,
     /// Whether the brick was sampled (else proven full or empty).
     pub sampled: bool,
+    /// The brick's solid volume by random samples and that estimate's
+    /// variance (see [`Measures::sampled_volume`]).
+    pub sampled_volume: [f64; 2],
 }
 
 /// What [`survey`] found in a slab of bricks.
@@ -125,6 +129,7 @@ fn brick_measures(b: usize, p: &Part) -> BrickMeasures {
         region: p.region,
         area: p.area,
         sampled: p.sampled,
+        sampled_volume: p.jitter,
     }
 }
 
@@ -144,6 +149,7 @@ pub fn survey(
         region.map(|r| r.tape()),
         grid,
         0,
+        true,
         true,
         &which,
         progress,
@@ -194,6 +200,7 @@ pub fn refine(
         grid,
         depth.min(MAX_DEPTH),
         false,
+        true,
         bricks,
         progress,
     );
@@ -242,12 +249,15 @@ pub fn merge_measures(
         m.volume.add(p.volume);
         m.region_volume.add(p.region);
         m.area.add(p.area);
+        m.sampled_volume += p.sampled_volume[0];
+        m.sampled_volume_error += p.sampled_volume[1];
         if p.sampled {
             m.sampled_bricks += 1;
         } else {
             m.proven_volume += p.region.value;
         }
     }
+    m.sampled_volume_error = m.sampled_volume_error.sqrt();
     Ok(m)
 }
 
@@ -493,7 +503,8 @@ pub fn merge_labels(grid: &Grid, slabs: &[SlabLabels]) -> Result<Connectivity> {
 mod tests {
     use super::*;
     use crate::{connectivity, measure};
-    use microfrep_core::{prims, Expr};
+    use microfrep_core::Expr;
+    use microfrep_shapes as prims;
 
     /// Balls on a lattice, some touching, with a wavy offset: many solid
     /// components and pores, creases where the R-function cuts them.

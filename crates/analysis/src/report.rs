@@ -74,8 +74,29 @@ impl Report {
         self.measures.volume.value
     }
 
+    /// The volume's error estimate: the Richardson estimate, or where the
+    /// volume misses part of the sampled volume (features between the
+    /// nodes, see [`Report::missed_volume`]) that difference plus three of
+    /// the sampling's standard deviations.
     pub fn volume_error(&self) -> f64 {
-        self.measures.volume.error()
+        let r = self.measures.volume.error();
+        match self.missed_volume() {
+            Some(d) => r.max(d.abs() + 3.0 * self.measures.sampled_volume_error),
+            None => r,
+        }
+    }
+
+    /// Where the measured volume and the volume sampled at random points
+    /// (see [`Measures::sampled_volume`]) differ by more than three of the
+    /// sampling's standard deviations and the Richardson error together:
+    /// sampled minus measured. Features smaller than a voxel were missed by
+    /// the fine and the coarse grid alike.
+    pub fn missed_volume(&self) -> Option<f64> {
+        let m = &self.measures;
+        let d = m.sampled_volume - m.volume.value;
+        (d.abs() > 3.0 * m.sampled_volume_error + m.volume.error()
+            && d.abs() > 1e-9 * m.region_volume.value.abs())
+        .then_some(d)
     }
 
     /// Volume of the region, or of the bounds.
@@ -87,13 +108,14 @@ impl Report {
         self.measures.region_volume.error()
     }
 
-    /// Solid volume over region volume (relative density).
+    /// Solid volume over region volume (relative density); NaN
+    /// (undefined) when the region is empty.
     pub fn volume_fraction(&self) -> f64 {
         let r = self.region_volume();
         if r > 0.0 {
             self.volume() / r
         } else {
-            0.0
+            f64::NAN
         }
     }
 
@@ -102,11 +124,11 @@ impl Report {
         if r > 0.0 {
             (self.volume_error() + self.volume_fraction() * self.region_volume_error()) / r
         } else {
-            0.0
+            f64::NAN
         }
     }
 
-    /// `1 - volume_fraction`.
+    /// `1 - volume_fraction` (NaN, undefined, for an empty region).
     pub fn porosity(&self) -> f64 {
         1.0 - self.volume_fraction()
     }
@@ -121,22 +143,65 @@ impl Report {
         self.measures.area.error()
     }
 
-    /// Area over solid volume.
+    /// Area over solid volume; NaN (undefined) without solid.
     pub fn specific_surface(&self) -> f64 {
         if self.volume() > 0.0 {
             self.area() / self.volume()
         } else {
-            0.0
+            f64::NAN
         }
     }
 
     pub fn specific_surface_error(&self) -> f64 {
         let (a, v) = (self.area(), self.volume());
-        if a > 0.0 && v > 0.0 {
-            self.specific_surface() * (self.area_error() / a + self.volume_error() / v)
+        if v > 0.0 {
+            self.specific_surface()
+                * (self.area_error() / a.max(f64::MIN_POSITIVE) + self.volume_error() / v)
         } else {
-            0.0
+            f64::NAN
         }
+    }
+
+    /// Why some figures are undefined or the result is empty, for people:
+    /// an empty region, no solid, or solid everywhere.
+    pub fn notes(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let within = if self.region {
+            "inside the region"
+        } else {
+            "in the box"
+        };
+        if self.region_volume() <= 0.0 {
+            out.push(if self.region {
+                "the region is empty inside the box: volume fraction, porosity and specific \
+                 surface are undefined (check --region and --bounds)"
+                    .to_string()
+            } else {
+                "the box has no volume: every figure is undefined".to_string()
+            });
+        } else if self.volume() <= 0.0 {
+            out.push(format!(
+                "no solid {within} at this resolution (voxels of {}): specific surface and \
+                 thickness are undefined; a model thinner than a voxel needs a finer grid",
+                microfrep_io::text::sig(self.grid.voxel_size(), 4)
+            ));
+        } else if self.volume() >= self.region_volume() && self.area() <= 0.0 {
+            out.push(format!("solid everywhere {within}: no pores, no surface"));
+        }
+        if let Some(d) = self.missed_volume() {
+            let m = &self.measures;
+            out.push(format!(
+                "the volume differs from the model sampled at a random point of every 2^3 \
+                 voxels ({} ± {}) by {} %: features smaller than a voxel ({}) were missed \
+                 (the area, connectivity and thickness miss them too); the volume's ± \
+                 includes the difference; use a finer --resolution",
+                microfrep_io::text::sig(m.sampled_volume, 5),
+                microfrep_io::text::sig(m.sampled_volume_error, 2),
+                microfrep_io::text::sig(100.0 * d / m.sampled_volume.max(f64::MIN_POSITIVE), 3),
+                microfrep_io::text::sig(self.grid.voxel_size(), 4)
+            ));
+        }
+        out
     }
 }
 
@@ -149,6 +214,20 @@ pub fn analyze(
     opts: &AnalyzeOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> Result<Report> {
+    check_precision(solid, &grid, "the model")?;
+    if let Some(r) = region {
+        check_precision(r, &grid, "the region")?;
+    }
+    let need = crate::measure::predict_bytes(&grid);
+    if need > opts.memory_limit as f64 {
+        return Err(AnalysisError::Memory(format!(
+            "measuring a grid of {:?} voxels needs about {:.0} MiB, over the limit of {:.0} MiB; \
+             lower the resolution",
+            grid.dims,
+            need / MIB,
+            opts.memory_limit as f64 / MIB
+        )));
+    }
     let sampler = Sampler::new(solid, region, grid.clone());
     if opts.connectivity {
         let need = connectivity::predict_bytes(&sampler);
@@ -196,3 +275,17 @@ pub fn analyze(
 }
 
 const MIB: f64 = 1024.0 * 1024.0;
+
+/// Refuses a model whose f32 batch values disagree with its f64 values in
+/// the grid's box (see [`microfrep_io::precision::check_agreement`]).
+fn check_precision(shape: &Shape, grid: &Grid, what: &str) -> Result<()> {
+    use microfrep_io::precision::{check_agreement, probe_points, PROBE_POINTS};
+    let pts = probe_points(grid.lo, grid.hi, PROBE_POINTS);
+    let axis = |a: usize| -> Vec<f32> { pts.iter().map(|p| p[a] as f32).collect() };
+    let mut v32 = vec![0.0f32; pts.len()];
+    shape.batch().eval(&axis(0), &axis(1), &axis(2), &mut v32);
+    let mut pe = shape.point();
+    let v64: Vec<f64> = pts.iter().map(|p| pe.eval(*p)).collect();
+    check_agreement(&pts, &v32, &v64)
+        .map_err(|e| AnalysisError::Input(format!("cannot analyse {what}: {e}")))
+}

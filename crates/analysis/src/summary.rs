@@ -57,9 +57,11 @@ pub fn to_json(r: &Report, model: &str, region: Option<&str>) -> Value {
         "area": { "value": r.area(), "error": r.area_error(), "coarse": m.area.coarse },
         "specific_surface": { "value": r.specific_surface(), "error": r.specific_surface_error() },
         "proven_volume": m.proven_volume,
+        "sampled_volume": { "value": m.sampled_volume, "error": m.sampled_volume_error },
         "bricks": { "sampled": m.sampled_bricks, "total": m.bricks },
         "refine_depth": m.refine_depth,
         "creased_cells": m.creased_cells,
+        "notes": r.notes(),
         "connectivity": conn,
         "thickness": r.thickness.as_ref().map(thickness_json),
         "attributes": r.attributes.iter().enumerate().map(|(k, a)| json!({
@@ -171,10 +173,10 @@ pub fn to_text(r: &Report, model: &str, region: Option<&str>) -> String {
             s(others)
         );
         println!(
-            "  pores       {} component(s) (6-connected), {:.2}% of pore volume open to the \
+            "  pores       {} component(s) (6-connected), {} % of pore volume open to the \
              outside, {} closed (volume {})",
             c.pore_components,
-            100.0 * c.open_pore_fraction(),
+            s5(100.0 * c.open_pore_fraction()),
             c.closed_pores,
             s(c.closed_pore_volume)
         );
@@ -242,6 +244,9 @@ pub fn to_text(r: &Report, model: &str, region: Option<&str>) -> String {
             s(a.min),
             s(a.max)
         );
+    }
+    for n in r.notes() {
+        println!("  note        {n}");
     }
     println!(
         "  accuracy    ± are Richardson estimates (grid vs grid coarsened by 2); \

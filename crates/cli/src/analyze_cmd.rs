@@ -1,7 +1,7 @@
 //! `microfrep analyze`: volume fraction, surface area, connectivity and
 //! thickness of a model, with the accuracy of each figure.
 
-use crate::common::{frame, load_model, ModelArgs, RunArgs};
+use crate::common::{check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use microfrep::analysis::summary::{to_json, to_text};
@@ -39,6 +39,7 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
     a.run.init()?;
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?.corners();
+    probe_terminates(&m, b)?;
     let grid = match (a.resolution, a.voxel) {
         (Some(n), _) => Grid::new(b, n)?,
         (None, Some(v)) => Grid::with_voxel(b, v)?,
@@ -86,6 +87,7 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
     );
     bar.finish_and_clear();
     let report = report?;
+    check_terminates(&m, &[])?;
     let name = a.model.model.as_str();
     if a.run.json {
         println!("{}", to_json(&report, name, a.region.as_deref()));

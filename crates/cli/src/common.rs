@@ -1,7 +1,7 @@
 //! What every verb shares: the model options (`MODEL`, `--object`, `-a`,
 //! `--field`, `--bounds`), the run options (`--quiet`, `--json`,
 //! `--threads`), loading with progress, the one rule for the default box,
-//! progress bars and number formatting.
+//! progress bars and error chains.
 
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
@@ -196,8 +196,9 @@ pub fn parse_box(flag: &str, s: &str) -> Result<([f64; 3], [f64; 3])> {
     if let Some(t) = v.iter().find(|t| !t.is_finite()) {
         bail!("{flag}: {t} is not a finite number");
     }
-    if let Some(t) = v.iter().find(|t| t.abs() > 1e15) {
-        bail!("{flag}: {t} is beyond what the sampling grids can represent (|v| <= 1e15)");
+    let max = microfrep::io::precision::MAX_COORDINATE;
+    if let Some(t) = v.iter().find(|t| t.abs() > max) {
+        bail!("{flag}: {t:e} is beyond what the sampling grids can represent (|v| <= {max:e})");
     }
     let (lo, hi) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]]);
     for (a, name) in ["x", "y", "z"].iter().enumerate() {
@@ -223,6 +224,60 @@ pub fn check_extension(out: &Path, exts: &[&str], what: &str) -> Result<()> {
     if !exts.contains(&e.as_str()) {
         let list: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
         bail!("{}: {what} must end in {}", out.display(), list.join(", "));
+    }
+    Ok(())
+}
+
+/// An error and its causes on one line, each cause once: errors that
+/// already show their source (an I/O error naming its file) are not
+/// followed by the same text again.
+pub fn chain(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for c in e.chain().skip(1) {
+        let t = c.to_string();
+        if !msg.contains(&t) {
+            msg.push_str(": ");
+            msg.push_str(&t);
+        }
+    }
+    msg
+}
+
+/// Fails before any work when a HyperFun loop of the model runs to its
+/// iteration limit at one of a few probe points of the box `b` (a model
+/// that does not terminate; see [`check_terminates`]).
+pub fn probe_terminates(m: &Loaded, b: [[f64; 3]; 2]) -> Result<()> {
+    if m.hyperfun.is_some() {
+        let mut pe = m.shape.point();
+        for p in microfrep::io::precision::probe_points(b[0], b[1], 64) {
+            pe.eval(p);
+        }
+    }
+    check_terminates(m, &[])
+}
+
+/// Fails when a HyperFun loop of the model ran to its iteration limit at a
+/// point the job sampled: from then on every evaluation of the model fails
+/// at once, so the values depend on the order of evaluation. `outputs`
+/// (written from such values) are removed.
+pub fn check_terminates(m: &Loaded, outputs: &[&Path]) -> Result<()> {
+    if let Some(e) = m.hyperfun.as_ref().and_then(|h| h.runaway_loop()) {
+        for p in outputs {
+            let _ = if p.is_dir() {
+                std::fs::remove_dir_all(p)
+            } else {
+                std::fs::remove_file(p)
+            };
+        }
+        let removed = if outputs.is_empty() {
+            ""
+        } else {
+            "; the output was removed"
+        };
+        bail!(
+            "the model does not terminate everywhere: {e}; values sampled before and after \
+             it differ{removed}"
+        );
     }
     Ok(())
 }

@@ -112,7 +112,7 @@ fn main() {
         if broken_pipe(&e) {
             std::process::exit(0);
         }
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", common::chain(&e));
         std::process::exit(1);
     }
 }

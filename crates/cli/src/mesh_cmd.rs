@@ -1,9 +1,10 @@
 //! `microfrep mesh`: triangle mesh of a model to STL, OBJ, PLY or 3MF.
 
-use crate::common::{frame, load_model, num, ModelArgs, RunArgs};
+use crate::common::{check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs};
 use anyhow::Result;
 use clap::Args;
-use microfrep::mesh::job::{mesh_to_file, JobOptions, Summary};
+use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
+use microfrep::mesh::report;
 use microfrep::mesh::{CellMethod, Grid, MeshOptions};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -15,9 +16,11 @@ pub struct MeshArgs {
     /// Output file; the format follows the extension (.stl, .obj, .ply, .3mf).
     #[arg(short, long)]
     output: PathBuf,
-    /// Cells along the longest side of the box (default 256).
-    #[arg(long, conflicts_with = "voxel")]
-    resolution: Option<usize>,
+    /// Cells along the longest side of the box (default 256), or `auto`:
+    /// the coarsest (from 32 up by 1.5) whose mesh keeps the model's volume
+    /// within 0.5 %.
+    #[arg(long, conflicts_with = "voxel", value_parser = parse_resolution)]
+    resolution: Option<Resolution>,
     /// Cell size in model units (millimetres).
     #[arg(long)]
     voxel: Option<f64>,
@@ -25,6 +28,13 @@ pub struct MeshArgs {
     /// anyway when the mesh would not fit in memory); skips the edge check.
     #[arg(long)]
     stream: bool,
+    /// Fail (writing nothing) when the mesh has more than PCT % less
+    /// volume than the model sampled in every cell: thin features lost.
+    #[arg(long, value_name = "PCT", default_value_t = 5.0)]
+    max_volume_loss: f64,
+    /// Leave every vertex on the surface: no chordal volume correction.
+    #[arg(long)]
+    no_volume_correction: bool,
     /// Cell method: cubes (default; about a third of the triangles, faster)
     /// or tets (marching tetrahedra: sharp creases cut less).
     #[arg(long, value_enum, default_value_t = Cells::Cubes)]
@@ -39,18 +49,43 @@ enum Cells {
     Tets,
 }
 
+#[derive(Clone, Copy, Debug)]
+enum Resolution {
+    Cells(usize),
+    Auto,
+}
+
+fn parse_resolution(s: &str) -> Result<Resolution, String> {
+    match s {
+        "auto" => Ok(Resolution::Auto),
+        _ => s
+            .parse()
+            .map(Resolution::Cells)
+            .map_err(|_| format!("'{s}' is not a cell count or 'auto'")),
+    }
+}
+
 pub fn run(a: MeshArgs) -> Result<()> {
     let start = Instant::now();
     a.run.init()?;
     microfrep::mesh::write::format_of(&a.output)?;
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?.corners();
-    let resolution = match (a.resolution, a.voxel) {
-        (Some(n), _) => n,
-        (None, Some(v)) => Grid::resolution_for_voxel(b, v)?,
-        (None, None) => 256,
+    probe_terminates(&m, b)?;
+    let (resolution, auto) = match (a.resolution, a.voxel) {
+        (Some(Resolution::Cells(n)), _) => (n, None),
+        (Some(Resolution::Auto), _) => (0, Some(AutoOptions::default())),
+        (None, Some(v)) => (Grid::resolution_for_voxel(b, v)?, None),
+        (None, None) => (256, None),
     };
+    if !(a.max_volume_loss >= 0.0 && a.max_volume_loss <= 100.0) {
+        anyhow::bail!(
+            "--max-volume-loss {}: give a percentage from 0 to 100",
+            a.max_volume_loss
+        );
+    }
     let mut opts = MeshOptions::new(b, resolution);
+    opts.volume_correction = !a.no_volume_correction;
     opts.cells = match a.cells {
         Cells::Cubes => CellMethod::Cubes,
         Cells::Tets => CellMethod::Tetrahedra,
@@ -63,75 +98,21 @@ pub fn run(a: MeshArgs) -> Result<()> {
     };
     let job = JobOptions {
         stream: a.stream,
-        memory_limit: None,
+        max_volume_loss: Some(a.max_volume_loss / 100.0),
+        auto,
+        ..JobOptions::default()
     };
     let s = mesh_to_file(&m.shape, &opts, &a.output, &job, &progress);
     bar.finish_and_clear();
     let s = s?;
+    check_terminates(&m, &[&a.output])?;
     let secs = start.elapsed().as_secs_f64();
     let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
+    let out = a.output.display().to_string();
     if a.run.json {
-        println!("{}", json(&a, &s, secs, peak));
+        println!("{}", report::to_json(&s, &out, secs, peak));
     } else if !a.run.quiet {
-        print_text(&a, &s, secs, peak);
+        print!("{}", report::to_text(&s, &out, secs, peak));
     }
     Ok(())
-}
-
-fn json(a: &MeshArgs, s: &Summary, secs: f64, peak: f64) -> serde_json::Value {
-    serde_json::json!({
-        "output": a.output.display().to_string(),
-        "resolution": s.resolution,
-        "cells": format!("{:?}", a.cells).to_lowercase(),
-        "cell": s.cell,
-        "triangles": s.triangles,
-        "vertices": s.vertices,
-        "bad_edges": s.bad_edges,
-        "euler": s.euler,
-        "streamed": s.streamed,
-        "volume": s.volume,
-        "area": s.area,
-        "bbox": s.bbox,
-        "seconds": secs,
-        "peak_bytes": peak,
-        "predicted_peak_bytes": s.predicted_bytes,
-        "thin_cells": s.thin_cells,
-        "runtime_errors": s.runtime_errors.as_ref().map(|c| c.errors),
-    })
-}
-
-fn print_text(a: &MeshArgs, s: &Summary, secs: f64, peak: f64) {
-    const MIB: f64 = 1024.0 * 1024.0;
-    println!("wrote {}", a.output.display());
-    println!(
-        "  grid       {} cells on the longest side, cell {}",
-        s.resolution,
-        num(s.cell)
-    );
-    println!("  triangles  {}", s.triangles);
-    println!("  vertices   {}", s.vertices);
-    match (s.bad_edges, s.euler) {
-        (Some(b), Some(e)) => println!("  bad edges  {b} (euler {e})"),
-        _ => println!("  bad edges  not checked (streamed to disk)"),
-    }
-    println!("  volume     {}", num(s.volume));
-    println!("  area       {}", num(s.area));
-    let bb = |p: [f64; 3]| p.map(num).join(", ");
-    println!("  bbox       [{}] .. [{}]", bb(s.bbox[0]), bb(s.bbox[1]));
-    println!("  time       {secs:.2} s");
-    if let Some(c) = s.runtime_errors.as_ref().filter(|c| c.errors > 0) {
-        println!("  run-time errors at {c}; those nodes count as outside");
-    }
-    if s.thin_cells > 0 {
-        println!(
-            "  note       interval analysis found {} cells that may hold features thinner \
-             than a cell; they are not in the mesh (try a finer resolution)",
-            s.thin_cells
-        );
-    }
-    println!(
-        "  peak mem   {:.1} MiB (predicted {:.1} MiB)",
-        peak / MIB,
-        s.predicted_bytes / MIB
-    );
 }

@@ -1,6 +1,6 @@
 //! `microfrep slice`: layer images, SVG contours or a CLI file.
 
-use crate::common::{frame, load_model, ModelArgs, RunArgs};
+use crate::common::{check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs};
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use microfrep::fab::{write_stack, Format, SliceGrid};
@@ -59,24 +59,29 @@ pub fn run(a: SliceArgs) -> Result<()> {
     };
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?;
+    probe_terminates(&m, b.corners())?;
     let grid = SliceGrid::new(b.min, b.max, a.layer, a.pixel)?;
     let bar = a.run.bar("layers");
     bar.set_message("slicing");
     bar.set_length(grid.layers as u64);
-    match a.attribute {
-        Some(k) => {
-            if k == 0 || !matches!(a.format, SliceFormat::Png) {
-                bail!("--attribute K (from 1) writes png layers");
-            }
-            let f = microfrep::fab::AttributeStack::new(&m.shape, k - 1)?;
-            write_stack(&m.shape, &grid, &f, &a.output, &|| bar.inc(1))?
+    let written = match a.attribute {
+        Some(k) if k == 0 || !matches!(a.format, SliceFormat::Png) => {
+            bail!("--attribute K (from 1) writes png layers")
         }
+        Some(k) => microfrep::fab::AttributeStack::new(&m.shape, k - 1)
+            .and_then(|f| write_stack(&m.shape, &grid, &f, &a.output, &|| bar.inc(1)))
+            .map_err(anyhow::Error::new),
         None if matches!(a.format, SliceFormat::ThreeMf) => {
-            microfrep::export::slice_3mf(&m.shape, &grid, 128, &a.output, &|| bar.inc(1))?;
+            microfrep::export::slice_3mf(&m.shape, &grid, 128, &a.output, &|| bar.inc(1))
+                .map(|_| ())
+                .map_err(anyhow::Error::new)
         }
-        None => write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1))?,
-    }
+        None => write_stack(&m.shape, &grid, &format, &a.output, &|| bar.inc(1))
+            .map_err(anyhow::Error::new),
+    };
     bar.finish_and_clear();
+    written?;
+    check_terminates(&m, &[&a.output])?;
     // Run-time errors at the pixel centres: those pixels are NaN (empty).
     let xs: Vec<f64> = (0..grid.nx).map(|i| grid.x(i)).collect();
     let ys: Vec<f64> = (0..grid.ny).map(|j| grid.y(j)).collect();

@@ -1,10 +1,12 @@
 //! `microfrep voxels`: occupancy or field values on a voxel grid.
 
-use crate::common::{check_extension, frame, load_model, ModelArgs, RunArgs};
+use crate::common::{
+    check_extension, check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs,
+};
 use anyhow::Result;
 use clap::Args;
 use microfrep::fab::voxels::{write_voxels, VoxelGrid};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct VoxelsArgs {
@@ -28,8 +30,17 @@ pub fn run(a: VoxelsArgs) -> Result<()> {
     check_extension(&a.output, &["raw", "vtk", "nrrd"], "the voxel file")?;
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?;
+    probe_terminates(&m, b.corners())?;
     let grid = VoxelGrid::new(b.min, b.max, a.voxel)?;
     write_voxels(&m.shape, &grid, a.field, &a.output)?;
+    let sidecar = a.output.with_extension("json");
+    let raw = a.output.extension().is_some_and(|e| e == "raw");
+    let outputs: Vec<&Path> = if raw {
+        vec![&a.output, &sidecar]
+    } else {
+        vec![&a.output]
+    };
+    check_terminates(&m, &outputs)?;
     let [nx, ny, nz] = grid.dims;
     if a.run.json {
         let s = serde_json::json!({

@@ -88,7 +88,7 @@ fn lattice_file_in_a_region_with_text_output() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("inside region"), "{out}");
-    assert!(out.contains("100.00% of pore volume open"), "{out}");
+    assert!(out.contains("100 % of pore volume open"), "{out}");
 }
 
 #[test]

@@ -100,7 +100,9 @@ fn strut_fill_is_a_beam_lattice_and_triangles_on_request() {
 fn slice_stack_3mf_holds_the_svg_polygons() {
     let d = dir("slices");
     let (svg, tmf) = (d.join("svg"), d.join("stack.3mf"));
-    let common = ["--layer", "0.2", "--pixel", "0.02", "--quiet"];
+    // Layers of 0.1: toriball's tubes cross every layer centre (at 0.2 the
+    // centres all fall between them and the stack is refused as empty).
+    let common = ["--layer", "0.1", "--pixel", "0.02", "--quiet"];
     let mut a = vec![
         "slice",
         "toriball",
@@ -123,11 +125,10 @@ fn slice_stack_3mf_holds_the_svg_polygons() {
     ok(&b);
     let model = microfrep_3mf::read_file(&tmf).unwrap();
     let stack = &model.slice_stacks[0];
-    assert_eq!(stack.slices.len(), 10);
+    assert_eq!(stack.slices.len(), 20);
     for (k, s) in stack.slices.iter().enumerate() {
         let text = std::fs::read_to_string(svg.join(format!("layer_{k:05}.svg"))).unwrap();
-        let loops = text.matches("<path").count() + text.matches("<polygon").count();
-        assert!(loops > 0);
+        assert!(!s.polygons.is_empty(), "layer {k} is empty");
         assert_eq!(
             s.polygons.len(),
             microfrep_fab::svg::read_layer_svg(&text).len(),

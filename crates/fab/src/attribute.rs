@@ -65,14 +65,22 @@ impl StackFormat for AttributeStack {
     fn single_file(&self) -> bool {
         false
     }
-    fn layer(&self, shape: &Shape, grid: &SliceGrid, k: usize, path: &Path) -> Result<Vec<u8>> {
+    fn layer(
+        &self,
+        shape: &Shape,
+        grid: &SliceGrid,
+        k: usize,
+        path: &Path,
+    ) -> Result<(Vec<u8>, u64)> {
+        let pixels = self.layer_pixels(shape, grid, k);
+        let solid = pixels.iter().filter(|&&v| v > 0).count() as u64;
         let img = GreyImage {
             width: grid.nx,
             height: grid.ny,
             binary: false,
-            pixels: self.layer_pixels(shape, grid, k),
+            pixels,
         };
-        img.encode(path)
+        Ok((img.encode(path)?, solid))
     }
     fn footer(&self, grid: &SliceGrid) -> Vec<u8> {
         let mut s = String::from("{\n  \"format\": \"png-8bit-attribute\",\n");

@@ -6,6 +6,17 @@ pub enum FabError {
     /// Bad parameters (no underlying error).
     #[error("invalid parameters: {0}")]
     Invalid(String),
+    /// The job would not fit in the memory the process may use.
+    #[error("{0}")]
+    TooLarge(String),
+    /// f32 sampling cannot resolve the model (its values underflow or
+    /// overflow in f32); the message says where.
+    #[error("cannot sample this model: {0}")]
+    Precision(microfrep_io::precision::PrecisionError),
+    /// The output would hold nothing (no pixel or voxel inside the
+    /// model); the message says why. Nothing was written.
+    #[error("{0}")]
+    Empty(String),
     /// Reading or writing a file failed, or the I/O layer refused (an
     /// output that would replace an input, an existing output directory).
     #[error(transparent)]

@@ -50,6 +50,21 @@ impl SliceGrid {
                 )));
             }
         }
+        for (a, name, step, what) in [
+            (0, "width", pixel, "pixel"),
+            (1, "depth", pixel, "pixel"),
+            (2, "height", layer, "layer"),
+        ] {
+            let side = max[a] - min[a];
+            if step > side {
+                return Err(FabError::Invalid(format!(
+                    "the {what} size {step} exceeds the box's {name} {side}: its samples would \
+                     lie outside the box; use a {what} of at most {side} or a larger box"
+                )));
+            }
+        }
+        microfrep_io::precision::check_grid(min, max, pixel.min(layer))
+            .map_err(|e| FabError::Invalid(format!("cannot slice: {e}")))?;
         let nx = count(max[0] - min[0], pixel, "image width", MAX_SIDE)?;
         let ny = count(max[1] - min[1], pixel, "image height", MAX_SIDE)?;
         if nx * ny > MAX_PIXELS {
@@ -82,4 +97,18 @@ impl SliceGrid {
     pub fn y(&self, j: usize) -> f64 {
         self.min[1] + (j as f64 + 0.5) * self.pixel
     }
+}
+
+/// Refuses a model whose f32 batch values disagree with its f64 values in
+/// the box `min..max` (see [`microfrep_io::precision::check_agreement`]):
+/// the layers or voxels would be silently wrong.
+pub fn check_precision(shape: &microfrep_core::Shape, min: [f64; 3], max: [f64; 3]) -> Result<()> {
+    use microfrep_io::precision::{check_agreement, probe_points, PROBE_POINTS};
+    let pts = probe_points(min, max, PROBE_POINTS);
+    let axis = |a: usize| -> Vec<f32> { pts.iter().map(|p| p[a] as f32).collect() };
+    let mut v32 = vec![0.0f32; pts.len()];
+    shape.batch().eval(&axis(0), &axis(1), &axis(2), &mut v32);
+    let mut pe = shape.point();
+    let v64: Vec<f64> = pts.iter().map(|p| pe.eval(*p)).collect();
+    check_agreement(&pts, &v32, &v64).map_err(FabError::Precision)
 }

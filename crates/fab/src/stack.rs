@@ -63,8 +63,15 @@ pub trait StackFormat: Sync {
     fn header(&self, _grid: &SliceGrid) -> Vec<u8> {
         Vec::new()
     }
-    /// The bytes of layer `k` (called in parallel for different layers).
-    fn layer(&self, shape: &Shape, grid: &SliceGrid, k: usize, path: &Path) -> Result<Vec<u8>>;
+    /// The bytes of layer `k` and its number of solid pixels (called in
+    /// parallel for different layers).
+    fn layer(
+        &self,
+        shape: &Shape,
+        grid: &SliceGrid,
+        k: usize,
+        path: &Path,
+    ) -> Result<(Vec<u8>, u64)>;
     /// Bytes after the last layer of a single-file stack, or the manifest
     /// of a directory stack.
     fn footer(&self, grid: &SliceGrid) -> Vec<u8>;
@@ -94,7 +101,13 @@ impl StackFormat for Format {
             _ => Vec::new(),
         }
     }
-    fn layer(&self, shape: &Shape, grid: &SliceGrid, k: usize, path: &Path) -> Result<Vec<u8>> {
+    fn layer(
+        &self,
+        shape: &Shape,
+        grid: &SliceGrid,
+        k: usize,
+        path: &Path,
+    ) -> Result<(Vec<u8>, u64)> {
         layer_payload(shape, grid, *self, k, top(grid), path)
     }
     fn footer(&self, grid: &SliceGrid) -> Vec<u8> {
@@ -127,6 +140,7 @@ pub fn write_stack(
     progress: &(dyn Fn() + Sync),
 ) -> Result<()> {
     use microfrep_io::{AtomicDir, AtomicFile};
+    crate::grid::check_precision(shape, grid.min, top(grid))?;
     enum Target {
         File(AtomicFile),
         Dir(AtomicDir),
@@ -139,21 +153,37 @@ pub fn write_stack(
     } else {
         Target::Dir(AtomicDir::create(out)?)
     };
-    let batch = 2 * rayon::current_num_threads();
+    let batch = layers_in_flight(grid, microfrep_io::limits::memory_limit())?;
+    let mut solid = 0u64;
     for start in (0..grid.layers).step_by(batch) {
         let end = (start + batch).min(grid.layers);
-        let payloads: Vec<Result<Vec<u8>>> = (start..end)
+        let payloads: Vec<Result<(Vec<u8>, u64)>> = (start..end)
             .into_par_iter()
             .map(|k| format.layer(shape, grid, k, &out.join(format.layer_name(k))))
             .collect();
         for (k, p) in (start..end).zip(payloads) {
-            let bytes = p?;
+            let (bytes, n) = p?;
+            solid += n;
             match &mut target {
                 Target::File(f) => f.write_all(&bytes).map_err(io_at(out))?,
                 Target::Dir(d) => d.write(&format.layer_name(k), &bytes)?,
             }
             progress();
         }
+    }
+    if solid == 0 {
+        // Dropping the target removes the temporary: nothing is written.
+        return Err(crate::FabError::Empty(format!(
+            "{}: no pixel of the {} layers ({} x {} pixels of {}, layers of {}) is inside the \
+             model: the part is thinner than a layer or a pixel, undefined (NaN) or outside \
+             the box; use finer --layer and --pixel or check --bounds",
+            out.display(),
+            grid.layers,
+            grid.nx,
+            grid.ny,
+            grid.pixel,
+            grid.layer
+        )));
     }
     let tail = format.footer(grid);
     match target {
@@ -169,6 +199,35 @@ pub fn write_stack(
     Ok(())
 }
 
+/// Bytes per pixel of a layer being made: its values (4), its image or
+/// coverage (1 to 2) and encoded bytes, with slack for contours.
+const BYTES_PER_PIXEL: f64 = 10.0;
+
+/// Layers computed at once: two per thread, fewer when their images would
+/// not fit `limit` bytes (with a fifth kept free); an error when one layer
+/// alone does not fit.
+pub fn layers_in_flight(grid: &SliceGrid, limit: Option<f64>) -> Result<usize> {
+    let per_layer = BYTES_PER_PIXEL * (grid.nx * grid.ny) as f64 + 1e6;
+    let want = 2 * rayon::current_num_threads();
+    let Some(limit) = limit else {
+        return Ok(want);
+    };
+    let fit = (0.8 * limit / per_layer).floor();
+    if fit < 1.0 {
+        return Err(crate::FabError::TooLarge(format!(
+            "a layer of {} x {} pixels needs about {:.0} MiB but {:.0} MiB are available; use a \
+             coarser --pixel",
+            grid.nx,
+            grid.ny,
+            per_layer / MIB,
+            limit / MIB
+        )));
+    }
+    Ok(want.min(fit as usize))
+}
+
+const MIB: f64 = 1024.0 * 1024.0;
+
 /// The bytes one layer contributes: a PNG, an SVG or a CLI layer block.
 fn layer_payload(
     shape: &Shape,
@@ -177,9 +236,10 @@ fn layer_payload(
     k: usize,
     max: [f64; 3],
     path: &Path,
-) -> Result<Vec<u8>> {
+) -> Result<(Vec<u8>, u64)> {
     let layer = rasterize(shape, grid, k);
-    Ok(match format {
+    let solid = layer.values.iter().filter(|&&v| v >= 0.0).count() as u64;
+    let bytes = match format {
         Format::Png { aa: false } => GreyImage::binary(&layer).encode(path)?,
         Format::Png { aa: true } => {
             let cov = coverage(shape, &layer, grid.pixel, [grid.min[0], grid.min[1]]);
@@ -196,7 +256,8 @@ fn layer_payload(
             let top = grid.min[2] + (k + 1) as f64 * grid.layer;
             cli_format::layer_block(top, &polys).into_bytes()
         }
-    })
+    };
+    Ok((bytes, solid))
 }
 
 /// `manifest.json`: geometry of the stack and one entry per layer.

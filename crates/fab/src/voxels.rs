@@ -59,8 +59,17 @@ impl VoxelGrid {
                     "bounds on axis {a} must be finite with min < max"
                 )));
             }
+            if voxel > len {
+                return Err(FabError::Invalid(format!(
+                    "the voxel size {voxel} exceeds the box's {} side {len}: the voxel centres \
+                     would lie outside the box; use a voxel of at most {len}",
+                    ["x", "y", "z"][a]
+                )));
+            }
             dims[a] = (len / voxel - 1e-9).ceil().max(1.0) as usize;
         }
+        microfrep_io::precision::check_grid(min, max, voxel)
+            .map_err(|e| FabError::Invalid(format!("cannot sample voxels: {e}")))?;
         let n = dims.iter().map(|&d| d as f64).product::<f64>();
         if n > MAX_VOXELS as f64 {
             return Err(FabError::Invalid(format!(
@@ -82,8 +91,34 @@ impl VoxelGrid {
 /// are complete (atomic outputs, committed together).
 pub fn write_voxels(shape: &Shape, grid: &VoxelGrid, field: bool, out: &Path) -> Result<()> {
     let format = VoxelFormat::from_path(out)?;
+    let s = grid.spacing;
+    let lo = grid.origin.map(|o| o - 0.5 * s);
+    let hi: [f64; 3] = std::array::from_fn(|a| lo[a] + grid.dims[a] as f64 * s);
+    crate::grid::check_precision(shape, lo, hi)?;
+    // One z-layer at a time: its values (4 bytes a voxel) and its bytes.
+    let layer = (grid.dims[0] * grid.dims[1]) as f64 * (4.0 + if field { 4.0 } else { 1.0 });
+    if let Some(m) = microfrep_io::limits::memory_limit().filter(|&m| layer > 0.8 * m) {
+        return Err(FabError::TooLarge(format!(
+            "a layer of {} x {} voxels needs about {:.0} MiB but {:.0} MiB are available; use \
+             a coarser --voxel",
+            grid.dims[0],
+            grid.dims[1],
+            layer / (1024.0 * 1024.0),
+            m / (1024.0 * 1024.0)
+        )));
+    }
     let mut f = AtomicFile::create(out)?;
-    write_into(shape, grid, field, format, &mut f).map_err(io_at(out))?;
+    let inside = write_into(shape, grid, field, format, &mut f).map_err(io_at(out))?;
+    if inside == 0 {
+        // Dropping `f` removes the temporary: nothing is written.
+        let [nx, ny, nz] = grid.dims;
+        return Err(FabError::Empty(format!(
+            "{}: none of the {nx} x {ny} x {nz} voxels (of {s}) has its centre inside the \
+             model: the part is smaller than a voxel, undefined (NaN) or outside the box; \
+             use a smaller --voxel or check --bounds",
+            out.display()
+        )));
+    }
     if format == VoxelFormat::Raw {
         let side = out.with_extension("json");
         let mut s = AtomicFile::create(&side)?;
@@ -102,7 +137,7 @@ fn write_into(
     field: bool,
     format: VoxelFormat,
     w: &mut AtomicFile,
-) -> std::io::Result<()> {
+) -> std::io::Result<u64> {
     let [nx, ny, nz] = g.dims;
     let [ox, oy, oz] = g.origin;
     let s = g.spacing;
@@ -128,6 +163,7 @@ fn write_into(
     };
     w.write_all(header.as_bytes())?;
     let mut bytes = Vec::new();
+    let mut inside = 0u64;
     for k in 0..nz {
         let vals = eval_grid_par(
             shape.tape(),
@@ -136,6 +172,7 @@ fn write_into(
             [s, s, s],
         );
         bytes.clear();
+        inside += vals.iter().filter(|&&v| v >= 0.0).count() as u64;
         if field {
             for v in vals {
                 // Legacy VTK binary data is big-endian.
@@ -154,7 +191,7 @@ fn write_into(
     if format == VoxelFormat::Vtk {
         w.write_all(b"\n")?;
     }
-    Ok(())
+    Ok(inside)
 }
 
 fn sidecar(g: &VoxelGrid, field: bool) -> String {

@@ -12,6 +12,8 @@
 //! - [`limits`]: the memory a job may use (the smallest of available RAM,
 //!   the cgroup limit and `RLIMIT_AS`), the peak resident size, and the free
 //!   space on the disk an output goes to.
+//! - [`precision`]: the boxes and cells f32 sampling can resolve, and a
+//!   probe comparing a model's f32 and f64 values.
 //!
 //! ```
 //! use microfrep_io::atomic::AtomicFile;
@@ -33,6 +35,7 @@ pub mod atomic;
 pub mod format;
 pub mod limits;
 pub mod png;
+pub mod precision;
 pub mod text;
 
 pub use atomic::{AtomicDir, AtomicFile};

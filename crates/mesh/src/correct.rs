@@ -9,13 +9,20 @@
 //! Work is split so bricks can do it on their own: [`accumulate`] sums each
 //! triangle's contribution into its corners' accumulators, the pipeline adds
 //! the accumulators of vertices shared with other bricks into their owner's,
-//! in a fixed order, and [`apply`] moves a vertex once all its triangles
-//! have been seen.
+//! and [`apply`] moves a vertex once all its triangles have been seen. The
+//! sums are in fixed point (integers in units of 2^-24 of the cell's area
+//! or volume), so they are exact and do not depend on the order in which a
+//! vertex's triangles arrive: the mesh is the same bytes whatever the brick
+//! size and the grouping of bricks.
 
 use microfrep_core::{BatchEval, BLOCK};
 
-/// Per-vertex sums: area-weighted normal (x, y, z), area times gap, area.
-pub type Acc = [f32; 5];
+/// Per-vertex sums: area-weighted normal (x, y, z) and area in units of
+/// `h^2 / 2^24`, area times gap in units of `h^3 / 2^24`.
+pub type Acc = [i32; 5];
+
+/// Fixed-point units per cell area (or volume).
+const UNIT: f32 = (1u32 << 24) as f32;
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -46,6 +53,8 @@ pub fn accumulate(
     let step = (h / 8.0) as f32;
     let inv_step = 1.0 / step;
     let limit = (h / 2.0) as f32;
+    let to_area = (UNIT as f64 / (h * h)) as f32;
+    let to_volume = (UNIT as f64 / (h * h * h)) as f32;
     const HALF: usize = BLOCK / 2;
     let mut an = [[0.0f32; 3]; HALF];
     let mut area = [0.0f32; HALF];
@@ -80,11 +89,18 @@ pub fn accumulate(
                 0.0
             };
             let (a, w) = (an[i], area[i]);
-            let add = [a[0], a[1], a[2], w * gap, w];
+            let q = |v: f32, unit: f32| (v * unit).round() as i32;
+            let add = [
+                q(a[0], to_area),
+                q(a[1], to_area),
+                q(a[2], to_area),
+                q(w * gap, to_volume),
+                q(w, to_area),
+            ];
             for &v in t {
                 let s = &mut acc[v as usize];
                 for k in 0..5 {
-                    s[k] += add[k];
+                    s[k] = s[k].saturating_add(add[k]);
                 }
             }
         }
@@ -94,19 +110,46 @@ pub fn accumulate(
 /// Adds `b` into `a`.
 pub fn add(a: &mut Acc, b: &Acc) {
     for k in 0..5 {
-        a[k] += b[k];
+        a[k] = a[k].saturating_add(b[k]);
     }
 }
 
-/// Moves `p` along its mean normal by 3/4 of its mean gap.
-pub fn apply(p: &mut [f32; 3], a: &Acc) {
-    let len = norm([a[0], a[1], a[2]]);
-    if len > 0.0 && a[4] > 0.0 {
-        let d = 0.75 * a[3] / a[4] / len;
+/// The displacement of a vertex along its mean normal by 3/4 of its mean
+/// gap, from its sums on a grid of cell size `h` (zero where they are
+/// degenerate).
+pub fn displacement(a: &Acc, h: f64) -> [f32; 3] {
+    let n = [a[0] as f64, a[1] as f64, a[2] as f64];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 && a[4] > 0 {
+        let d = 0.75 * h * (a[3] as f64 / a[4] as f64) / len;
         if d.is_finite() {
-            for k in 0..3 {
-                p[k] += d * a[k];
-            }
+            return n.map(|v| (d * v) as f32);
         }
+    }
+    [0.0; 3]
+}
+
+/// Moves `p` along its mean normal by 3/4 of its mean gap.
+pub fn apply(p: &mut [f32; 3], a: &Acc, h: f64) {
+    let d = displacement(a, h);
+    for k in 0..3 {
+        p[k] += d[k];
+    }
+}
+
+/// Like [`apply`], but no part of the move takes `p` further outside the
+/// box `lo..hi` than it is: along an axis where the move would leave the
+/// box, it stops at the face (so a vertex on a face slides within it). The
+/// correction never pushes a vertex through the box's faces, edges or
+/// corners.
+pub fn apply_within(p: &mut [f32; 3], a: &Acc, h: f64, lo: [f32; 3], hi: [f32; 3]) {
+    let d = displacement(a, h);
+    for k in 0..3 {
+        let q = p[k] + d[k];
+        p[k] = if d[k] > 0.0 {
+            q.min(hi[k].max(p[k]))
+        } else {
+            q.max(lo[k].min(p[k]))
+        };
     }
 }

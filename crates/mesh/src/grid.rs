@@ -1,6 +1,7 @@
-//! The uniform grid of the mesher: cells of size `h`, padded by one cell on
-//! every side so the outermost nodes lie outside the clipped solid, and cut
-//! into cubic bricks of `brick` cells.
+//! The uniform grid of the mesher: cells of size `h` over the box, each box
+//! face just beyond a node plane, padded by a cell on every side so the
+//! outermost nodes lie outside the clipped solid, and cut into cubic bricks
+//! of `brick` cells.
 
 use crate::MeshError;
 
@@ -22,6 +23,11 @@ pub struct Grid {
 /// directions must fit a u64 key with room to spare.
 pub const MAX_CELLS: usize = 1 << 16;
 
+/// How far (in cells) a box face lies beyond the node plane inside it:
+/// twice the least distance of a vertex from its edge's ends (see
+/// `refine`), so vertices on edges that cross a face land on it.
+const GAP: f64 = 2e-3;
+
 impl Grid {
     /// Grid with `n` cells on the longest side of `bounds` (min, max).
     pub fn new(bounds: [[f64; 3]; 2], n: usize, brick: usize) -> Result<Grid, MeshError> {
@@ -32,21 +38,44 @@ impl Grid {
                 "bounds {lo:?}..{hi:?} must be finite with min < max on every axis"
             )));
         }
-        if n == 0 || n > MAX_CELLS - 2 {
+        if n == 0 || n > MAX_CELLS - 3 {
             return Err(MeshError::Input(format!(
                 "resolution {n} must be between 1 and {}",
-                MAX_CELLS - 2
+                MAX_CELLS - 3
             )));
         }
         let longest = ext.iter().cloned().fold(0.0, f64::max);
-        let h = longest / n as f64;
+        // A gap of GAP cells beyond each face of the longest side (below).
+        let h = longest / (n as f64 + 2.0 * GAP);
+        // f32 samples must resolve the cells everywhere in the box.
+        microfrep_io::precision::check_grid(lo, hi, h)
+            .map_err(|e| MeshError::Input(format!("cannot mesh at resolution {n}: {e}")))?;
+        // Each face of the box lies a little beyond the nearest node plane
+        // inside it: `gap` on the longest side and the lower faces, at
+        // least `gap / 2` on the others. A face on a node plane would put
+        // the vertices of the edges leaving the box through its nodes a
+        // fraction of a cell outside the box (they lie strictly inside
+        // their edges); a face just inside a node plane would chamfer the
+        // box's edges by a whole cell.
+        let gap = GAP * h;
         let mut cells = [0; 3];
         let mut origin = [0.0; 3];
         for a in 0..3 {
-            // Cells covering the extent (tolerating rounding), plus padding.
-            let inner = ((ext[a] / h) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
-            cells[a] = inner + 2;
-            origin[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * cells[a] as f64 * h;
+            // Node 1 lies `gap` inside the box from the lower face.
+            let mut o = lo[a] + gap - h;
+            let beyond = |o: f64| {
+                let t = (hi[a] - (o + h)) / h;
+                (t - t.floor()) * h
+            };
+            if beyond(o) < 0.5 * gap {
+                // The upper face is too close beyond a node: shift both.
+                o -= gap;
+            }
+            // Cells up to the first node beyond the upper face, plus one
+            // of padding.
+            let inner = ((hi[a] - o) / h).ceil() as usize;
+            cells[a] = inner + 1;
+            origin[a] = o;
         }
         let bricks = cells.map(|c| c.div_ceil(brick));
         Ok(Grid {
@@ -67,10 +96,10 @@ impl Grid {
             return Err(MeshError::Input(format!("voxel size {voxel} must be > 0")));
         }
         let n = (longest / voxel).ceil();
-        if !(n >= 1.0 && n <= (MAX_CELLS - 2) as f64) {
+        if !(n >= 1.0 && n <= (MAX_CELLS - 3) as f64) {
             return Err(MeshError::Input(format!(
                 "voxel size {voxel} gives {n} cells on the longest side (limit {})",
-                MAX_CELLS - 2
+                MAX_CELLS - 3
             )));
         }
         Ok(n as usize)

@@ -2,8 +2,8 @@
 //! a coarse sampling of the model: surface cells scale with the square of
 //! the resolution.
 
-use crate::{CellMethod, Plan};
-use microfrep_core::eval_grid_par;
+use crate::{CellMethod, Grid, Plan};
+use microfrep_core::{eval_grid_par, Tape};
 
 /// Triangles and vertices per surface cell of marching tetrahedra on the
 /// Kuhn split (measured on a sphere: about 5.9 and 3.0; rounded up), and of
@@ -22,16 +22,38 @@ const BYTES_PER_VERT: f64 = 64.0;
 /// Coarse grid used to count surface cells.
 const COARSE: usize = 64;
 
+/// Bytes in a GiB, for messages.
+pub const GIB: f64 = (1u64 << 30) as f64;
+
+/// Bytes held whatever the job: the tape, thread pools, buffers.
+const FIXED: f64 = 64e6;
+
 #[derive(Clone, Copy, Debug)]
 pub struct Estimate {
     pub triangles: f64,
     pub vertices: f64,
+    /// Peak bytes of the job meshed into memory, everything included.
     pub bytes: f64,
+    /// The part of `bytes` that grows with the cube of the resolution (the
+    /// brick classes), the rest growing with its square.
+    pub volume_bytes: f64,
+}
+
+/// Bytes of the brick classes of `grid` (one a brick).
+pub fn classes_bytes(grid: &Grid) -> f64 {
+    grid.bricks.iter().map(|&b| b as f64).product::<f64>()
 }
 
 /// Estimated output size and peak bytes of `plan`.
 pub fn estimate(plan: &Plan) -> Estimate {
-    let g = &plan.grid;
+    estimate_grid(&plan.tape, &plan.grid, plan.cells)
+}
+
+/// Estimated output size and peak bytes of meshing `tape` (clipped to the
+/// box, [`Plan::frame`]) on `grid`, before the plan is made: from a
+/// sampling of at most 65^3 nodes and never more nodes than the grid has,
+/// so a small job is never dearer to predict than to run.
+pub fn estimate_grid(tape: &Tape, g: &Grid, method: CellMethod) -> Estimate {
     let n = g.cells.iter().copied().max().unwrap_or(1);
     let m = COARSE.min(n);
     let scale = n as f64 / m as f64;
@@ -39,7 +61,7 @@ pub fn estimate(plan: &Plan) -> Estimate {
     let dims = g
         .cells
         .map(|c| ((c as f64 / scale).ceil() as usize).max(1) + 1);
-    let v = eval_grid_par(&plan.tape, dims, g.origin, [step; 3]);
+    let v = eval_grid_par(tape, dims, g.origin, [step; 3]);
     let idx = |i: usize, j: usize, k: usize| i + dims[0] * (j + dims[1] * k);
     let mut surface = 0usize;
     for k in 0..dims[2] - 1 {
@@ -55,17 +77,22 @@ pub fn estimate(plan: &Plan) -> Estimate {
         }
     }
     let cells = surface as f64 * scale * scale;
-    let (tpc, vpc) = match plan.cells {
+    let (tpc, vpc) = match method {
         CellMethod::Tetrahedra => (TRIS_PER_CELL, VERTS_PER_CELL),
         CellMethod::Cubes => (CUBES_TRIS_PER_CELL, CUBES_VERTS_PER_CELL),
     };
     let triangles = cells * tpc;
     let vertices = cells * vpc;
-    let scratch = scratch_bytes(plan);
+    let classes = classes_bytes(g);
     Estimate {
         triangles,
         vertices,
-        bytes: triangles * BYTES_PER_TRI + vertices * BYTES_PER_VERT + scratch + 64e6,
+        bytes: triangles * BYTES_PER_TRI
+            + vertices * BYTES_PER_VERT
+            + scratch_bytes(g)
+            + classes
+            + FIXED,
+        volume_bytes: classes,
     }
 }
 
@@ -78,26 +105,53 @@ const WINDOW_BYTES_PER_VERT: f64 = 76.0;
 /// Estimated peak bytes of `plan` streamed to disk: the pipeline holds
 /// three groups of z-slabs of bricks at a time, never the whole mesh.
 pub fn streaming_bytes(plan: &Plan, e: &Estimate) -> f64 {
-    let slabs = plan.grid.bricks[2] as f64;
-    let held = ((3 * plan.slabs_per_group()) as f64).min(slabs) / slabs;
-    let window = held * (e.triangles * WINDOW_BYTES_PER_TRI + e.vertices * WINDOW_BYTES_PER_VERT);
-    // Surface is not spread evenly over the slabs: allow twice the mean.
-    2.0 * window + scratch_bytes(plan) + 64e6
+    streaming_bytes_grid(&plan.grid, e)
 }
 
-fn scratch_bytes(plan: &Plan) -> f64 {
-    rayon::current_num_threads() as f64 * (plan.grid.brick as f64 + 1.0).powi(3) * 42.0
+/// [`streaming_bytes`] from the grid alone.
+pub fn streaming_bytes_grid(grid: &Grid, e: &Estimate) -> f64 {
+    let slabs = grid.bricks[2] as f64;
+    let held = ((3 * slabs_per_group(grid)) as f64).min(slabs) / slabs;
+    let window = held * (e.triangles * WINDOW_BYTES_PER_TRI + e.vertices * WINDOW_BYTES_PER_VERT);
+    // Surface is not spread evenly over the slabs: allow twice the mean.
+    2.0 * window + scratch_bytes(grid) + e.volume_bytes + FIXED
+}
+
+/// Z-slabs of bricks per pipeline step: enough bricks per group to keep
+/// every thread busy.
+pub(crate) fn slabs_per_group(grid: &Grid) -> usize {
+    let per_slab = grid.bricks[0] * grid.bricks[1];
+    let want = 4 * rayon::current_num_threads();
+    want.div_ceil(per_slab).clamp(1, grid.bricks[2])
+}
+
+fn scratch_bytes(grid: &Grid) -> f64 {
+    rayon::current_num_threads() as f64 * (grid.brick as f64 + 1.0).powi(3) * 42.0
 }
 
 /// The largest resolution whose estimate fits `budget` bytes, given the
-/// estimate `e` at resolution `n` (output size scales with n^2).
+/// estimate `e` at resolution `n` (output size scales with n^2, the brick
+/// table with n^3).
 pub fn resolution_fitting(e: &Estimate, n: usize, budget: f64) -> usize {
-    let fixed = 64e6;
-    if budget <= fixed || e.bytes <= fixed {
+    let area = (e.bytes - e.volume_bytes - FIXED).max(0.0);
+    let bytes_at = |m: f64| {
+        let r = m / n as f64;
+        FIXED + area * r * r + e.volume_bytes * r * r * r
+    };
+    if bytes_at(n as f64) <= budget {
         return n;
     }
-    let r = ((budget - fixed) / (e.bytes - fixed)).sqrt();
-    ((n as f64 * r).floor() as usize).clamp(1, n)
+    // bytes_at is increasing: bisect on the resolution.
+    let (mut lo, mut hi) = (1usize, n);
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if bytes_at(mid as f64) <= budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }
 
 #[cfg(test)]
@@ -110,6 +164,15 @@ mod tests {
             triangles: 0.0,
             vertices: 0.0,
             bytes: 64e6 + 4e9,
+            volume_bytes: 0.0,
+        };
+        assert_eq!(resolution_fitting(&e, 1000, 64e6 + 1e9), 500);
+        assert_eq!(resolution_fitting(&e, 1000, 1e12), 1000);
+        // A brick table growing with the cube: 8e9 at 1000 is 1e9 at 500.
+        let e = Estimate {
+            bytes: 64e6 + 8e9,
+            volume_bytes: 8e9,
+            ..e
         };
         assert_eq!(resolution_fitting(&e, 1000, 64e6 + 1e9), 500);
     }

@@ -16,7 +16,7 @@
 
 use crate::brick::{mesh_brick, BrickMesh, Scratch};
 use crate::classify::BrickClass;
-use crate::correct::{accumulate, add, apply, Acc};
+use crate::correct::{accumulate, add, apply_within, Acc};
 use crate::sink::{MeshSink, VertexWindow};
 use crate::{MeshError, Plan};
 use microfrep_core::BatchEval;
@@ -116,12 +116,9 @@ fn find(plan: &Plan, groups: [Option<Owners>; 2], key: u64) -> Result<Found, Mes
 }
 
 impl Plan {
-    /// Z-slabs of bricks per pipeline step: enough bricks per group to keep
-    /// every thread busy.
+    /// Z-slabs of bricks per pipeline step (see [`crate::memory`]).
     pub(crate) fn slabs_per_group(&self) -> usize {
-        let per_slab = self.grid.bricks[0] * self.grid.bricks[1];
-        let want = 4 * rayon::current_num_threads();
-        want.div_ceil(per_slab).clamp(1, self.grid.bricks[2])
+        crate::memory::slabs_per_group(&self.grid)
     }
 
     /// Meshes bricks `range` (whole slabs), numbering owned vertices from
@@ -166,7 +163,7 @@ impl Plan {
         let work = meshes
             .iter_mut()
             .map(|m| Work {
-                inbound: vec![[0.0; 5]; m.owned_pos.len()],
+                inbound: vec![[0; 5]; m.owned_pos.len()],
                 // Still in the brick's local numbering until stage A.
                 tris: std::mem::take(&mut m.tris),
                 ..Work::default()
@@ -228,8 +225,10 @@ impl Plan {
                     pos.push(p);
                 }
                 acc.clear();
-                acc.resize(pos.len(), [0.0; 5]);
-                accumulate(ev, pos, &w.tris, h, acc);
+                acc.resize(pos.len(), [0; 5]);
+                if self.correct {
+                    accumulate(ev, pos, &w.tris, h, acc);
+                }
                 w.acc = acc[..owned].to_vec();
                 w.foreign_acc = acc[owned..].to_vec();
                 let off = offsets[j];
@@ -269,9 +268,9 @@ fn stage_b(g: &mut Group, mut next: Option<&mut Group>) {
     }
 }
 
-/// Stage C: final positions of `g`'s vertices; frees what later stages do
-/// not need.
-fn stage_c(g: &mut Group) {
+/// Stage C: final positions of `g`'s vertices (corrected, then kept inside
+/// the box); frees what later stages do not need.
+fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp) {
     g.meshes
         .par_iter_mut()
         .zip(g.work.par_iter())
@@ -279,7 +278,8 @@ fn stage_c(g: &mut Group) {
             for ((p, a), b) in m.owned_pos.iter_mut().zip(&w.acc).zip(&w.inbound) {
                 let mut s = *a;
                 add(&mut s, b);
-                apply(p, &s);
+                apply_within(p, &s, h, clamp.lo, clamp.hi);
+                clamp.apply(p);
             }
         });
     let n: usize = g.meshes.iter().map(|m| m.owned_pos.len()).sum();
@@ -322,6 +322,7 @@ pub fn run(
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(), MeshError> {
     plan.thin_cells.store(0, Ordering::Relaxed);
+    let clamp = BoxClamp::new(plan.bounds);
     let grid = &plan.grid;
     let per_group = plan.slabs_per_group() * grid.bricks[0] * grid.bricks[1];
     let total = grid.brick_count();
@@ -347,7 +348,7 @@ pub fn run(
     while let Some(mut g) = cur.take() {
         plan.stage_a(&mut g, next.as_ref())?;
         stage_b(&mut g, next.as_mut());
-        stage_c(&mut g);
+        stage_c(&mut g, plan.grid.h, &clamp);
         let (emitted, after) = rayon::join(
             || -> Result<(), MeshError> {
                 sink.vertices(&g.verts)?;
@@ -367,4 +368,53 @@ pub fn run(
         emit_triangles(sink, &p, None)?;
     }
     Ok(())
+}
+
+/// The meshed box in f32, rounded inwards. The volume correction never
+/// pushes a vertex through it ([`crate::correct::apply_within`]), and what
+/// refinement left outside (a probe a little past a face where a tet's
+/// diagonal crosses the box's edge) is clamped onto the face. Vertices
+/// move; which triangles use them does not, so the mesh stays closed and
+/// manifold. Since no box face lies on a node plane ([`crate::Grid`]), no
+/// vertex sits exactly on one before clamping, and clamping one
+/// coordinate of vertices on distinct grid edges keeps them distinct (the
+/// tests check for coincident vertices and degenerate triangles).
+pub(crate) struct BoxClamp {
+    pub(crate) lo: [f32; 3],
+    pub(crate) hi: [f32; 3],
+}
+
+impl BoxClamp {
+    pub(crate) fn new(b: [[f64; 3]; 2]) -> BoxClamp {
+        // The f32 nearest `v`, moved one step up (or down) if it lies
+        // beyond `v` that way.
+        let inward = |v: f64, up: bool| {
+            let f = v as f32;
+            let beyond = if up { (f as f64) < v } else { (f as f64) > v };
+            if !beyond {
+                f
+            } else if f == 0.0 {
+                let tiny = f32::from_bits(1);
+                if up {
+                    tiny
+                } else {
+                    -tiny
+                }
+            } else if (f > 0.0) == up {
+                f32::from_bits(f.to_bits() + 1)
+            } else {
+                f32::from_bits(f.to_bits() - 1)
+            }
+        };
+        BoxClamp {
+            lo: b[0].map(|v| inward(v, true)),
+            hi: b[1].map(|v| inward(v, false)),
+        }
+    }
+
+    pub(crate) fn apply(&self, p: &mut [f32; 3]) {
+        for ((c, lo), hi) in p.iter_mut().zip(self.lo).zip(self.hi) {
+            *c = c.clamp(lo, hi);
+        }
+    }
 }

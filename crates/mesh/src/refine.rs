@@ -11,6 +11,9 @@ const STEPS: usize = 5;
 /// Vertices stay this fraction of the edge away from its ends, so vertices
 /// on different edges of a tet never coincide (no degenerate triangles).
 const T_MIN: f32 = 1e-3;
+/// ... and at least this many f32 steps of the coordinates away, so they
+/// stay distinct after rounding far from the origin.
+const MIN_ULPS: f64 = 4.0;
 
 /// One edge to refine: from its inside end `p0` (sample `g0 >= 0`) to its
 /// outside end `p1` (sample `g1 < 0`).
@@ -20,20 +23,34 @@ pub struct Edge {
     d: [f32; 3],
     g0: f32,
     g1: f32,
+    /// The least distance from either end, as a fraction of the edge.
+    t_min: f32,
 }
 
 impl Edge {
     pub fn new(p0: [f64; 3], p1: [f64; 3], g0: f32, g1: f32) -> Edge {
+        let d: [f64; 3] = std::array::from_fn(|k| p1[k] - p0[k]);
+        let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let far = (0..3)
+            .map(|k| p0[k].abs().max(p1[k].abs()))
+            .fold(0.0, f64::max);
+        let ulps = MIN_ULPS * microfrep_io::precision::f32_step(far) / len;
         Edge {
             p0: p0.map(|v| v as f32),
-            d: std::array::from_fn(|k| (p1[k] - p0[k]) as f32),
+            d: d.map(|v| v as f32),
             g0,
             g1,
+            t_min: (ulps as f32).clamp(T_MIN, 0.25),
         }
     }
 }
 
-/// Appends the refined position of every edge to `out`, in order.
+/// Appends the refined position of every edge to `out`, in order: the
+/// last probe of the search, or the first probe exactly on the surface;
+/// where the inside end was sampled exactly zero and no probe after it is
+/// inside, the end itself (a face through a node: the root is the node,
+/// not a probe a bisection step away from it). Positions stay `t_min`
+/// away from the ends.
 pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>) {
     for chunk in edges.chunks(BLOCK) {
         let n = chunk.len();
@@ -51,6 +68,9 @@ pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>)
             live[i] = e.g0 >= 0.0 && e.g1 < 0.0;
         }
         for _ in 0..STEPS {
+            if !live[..n].iter().any(|&l| l) {
+                break;
+            }
             {
                 let (x, y, z) = ev.coords_mut();
                 for (i, e) in chunk.iter().enumerate() {
@@ -71,7 +91,9 @@ pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>)
                 if !live[i] {
                     continue;
                 }
-                if g[i] >= 0.0 {
+                if g[i] == 0.0 {
+                    live[i] = false; // on the surface: keep t
+                } else if g[i] > 0.0 {
                     lo[i] = t[i];
                     glo[i] = g[i];
                     ghi[i] *= 0.5;
@@ -85,11 +107,58 @@ pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>)
             }
         }
         for (i, e) in chunk.iter().enumerate() {
-            out.push(lerp(e, t[i].clamp(T_MIN, 1.0 - T_MIN)));
+            let root_at_start = e.g0 == 0.0 && e.g1 < 0.0 && lo[i] == 0.0 && live[i];
+            let ti = if root_at_start { 0.0 } else { t[i] };
+            out.push(lerp(e, ti.clamp(e.t_min, 1.0 - e.t_min)));
         }
     }
 }
 
 fn lerp(e: &Edge, t: f32) -> [f32; 3] {
     std::array::from_fn(|k| e.p0[k] + t * e.d[k])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use microfrep_core::Expr;
+
+    fn refine(f: &Expr, p0: [f64; 3], p1: [f64; 3]) -> [f32; 3] {
+        let tape = microfrep_core::Shape::from(f).tape().clone();
+        let mut ev = BatchEval::new(&tape);
+        let mut pe = microfrep_core::PointEval::new(&tape);
+        let (g0, g1) = (pe.eval(p0) as f32, pe.eval(p1) as f32);
+        let mut out = Vec::new();
+        refine_edges(&mut ev, &[Edge::new(p0, p1, g0, g1)], &mut out);
+        out[0]
+    }
+
+    #[test]
+    fn an_end_exactly_on_the_surface_is_the_root() {
+        // The face x = -1 of a box through a grid node: f(-1) = 0 exactly.
+        let f = Expr::x() + 1.0;
+        let p = refine(&f, [-1.0, 0.2, 0.3], [-1.05, 0.2, 0.3]);
+        assert!((p[0] + 1.0).abs() <= 1e-3 * 0.05 + 1e-7, "{p:?}");
+    }
+
+    #[test]
+    fn roots_are_found_to_f32_precision_on_curved_and_flat_fields() {
+        let x = Expr::x();
+        // Root of 0.3 - x^2 at sqrt(0.3) (to 0.2 % of the edge in five
+        // steps), and of a plane at 0.1234 (exact in one).
+        let p = refine(&(0.3 - &x * &x), [0.5, 0.0, 0.0], [0.6, 0.0, 0.0]);
+        assert!((p[0] as f64 - 0.3f64.sqrt()).abs() < 2e-4, "{p:?}");
+        let p = refine(&(0.1234 - &x), [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]);
+        assert!((p[0] as f64 - 0.1234).abs() < 1e-6, "{p:?}");
+    }
+
+    #[test]
+    fn vertices_stay_distinct_from_the_ends_far_from_the_origin() {
+        // At 1000, f32 steps are 6.1e-5: a thousandth of a 0.01 edge would
+        // round onto its end.
+        let x = Expr::x();
+        let f = 1000.0 - &x;
+        let p = refine(&f, [1000.0, 0.0, 0.0], [1000.01, 0.0, 0.0]);
+        assert!(p[0] > 1000.0f32, "{p:?}");
+    }
 }

@@ -23,12 +23,13 @@ fn bounds_of_a_ball_enclose_it_tightly() {
 #[test]
 fn lattices_cut_by_a_block_or_a_shell_get_that_box() {
     // Plain interval arithmetic on the whole R-function gives boxes of about
-    // [-1.6, 1.6] x [-1.6, 1.6] x [-1.9, 1.9] and [-7, 7]^3 here.
+    // [-1.6, 1.6] x [-1.6, 1.6] x [-1.9, 1.9] and [-7, 7]^3 here; the
+    // budgeted subdivision proves boxes within 0.5 % of the cutting block.
     for (name, e) in [("toriball", toriball()), ("shell_lattice", shell_lattice())] {
         let b = Shape::from(&e).bounds().unwrap().corners();
         for a in 0..3 {
-            assert!(b[0][a] <= -1.0 && b[0][a] > -1.001, "{name}: {b:?}");
-            assert!(b[1][a] >= 1.0 && b[1][a] < 1.001, "{name}: {b:?}");
+            assert!(b[0][a] <= -1.0 && b[0][a] > -1.005, "{name}: {b:?}");
+            assert!(b[1][a] >= 1.0 && b[1][a] < 1.005, "{name}: {b:?}");
         }
     }
 }

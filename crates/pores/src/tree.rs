@@ -136,9 +136,10 @@ pub(crate) struct Params<'a> {
 }
 
 /// Cells up to this much larger (relative) than the requested size are
-/// not refined, so bounds found by interval analysis, a hair larger than
-/// the part, still give cells of the requested size.
-pub const SLACK: f64 = 1e-3;
+/// not refined, so bounds proven by interval analysis, a little larger
+/// than the part (about 0.1 % for R-function blocks), still give cells of
+/// the requested size.
+pub const SLACK: f64 = 1e-2;
 
 /// Deepest binary split allowed.
 pub const MAX_DEPTH: usize = 60;

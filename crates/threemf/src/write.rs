@@ -195,9 +195,13 @@ fn io_err(part: &str, source: std::io::Error) -> Error {
     }
 }
 
-/// A zip archive being written, with fixed timestamps.
+/// A zip archive being written, with fixed timestamps. The writer is not
+/// dropped when writing fails (a dropped `ZipWriter` tries to finish the
+/// archive on the failed stream and prints to stderr); only
+/// [`Package::finish`] closes it. The failed package's buffers are left to
+/// the process (the caller removes the output).
 struct Package<W: Write + Seek> {
-    zip: zip::ZipWriter<W>,
+    zip: std::mem::ManuallyDrop<zip::ZipWriter<W>>,
     opts: SimpleFileOptions,
     part: String,
 }
@@ -214,7 +218,7 @@ impl<W: Write + Seek> Package<W> {
             .last_modified_time(zip::DateTime::default())
             .large_file(false);
         Package {
-            zip: zip::ZipWriter::new(w),
+            zip: std::mem::ManuallyDrop::new(zip::ZipWriter::new(w)),
             opts,
             part: String::new(),
         }
@@ -248,10 +252,12 @@ impl<W: Write + Seek> Package<W> {
     }
 
     fn finish(self) -> Result<W> {
-        self.zip.finish().map_err(|source| Error::Zip {
-            part: "the archive".into(),
-            source,
-        })
+        std::mem::ManuallyDrop::into_inner(self.zip)
+            .finish()
+            .map_err(|source| Error::Zip {
+                part: "the archive".into(),
+                source,
+            })
     }
 }
 

@@ -11,7 +11,7 @@ mod stream;
 mod threemf;
 
 pub use stl::StlWriter;
-pub use stream::stream_mesh;
+pub use stream::{stream_mesh, stream_mesh_checked};
 
 use crate::{Mesh, MeshError};
 use microfrep_io::{AtomicFile, FormatRegistry, OutputFormat};

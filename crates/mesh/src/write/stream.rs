@@ -72,6 +72,18 @@ pub fn stream_mesh(
     normals: bool,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Tally, MeshError> {
+    stream_mesh_checked(plan, out, normals, progress, &|_| Ok(()))
+}
+
+/// [`stream_mesh`], with `verdict` asked about the finished mesh's tally
+/// before the file is committed: an error from it leaves nothing behind.
+pub fn stream_mesh_checked(
+    plan: &Plan,
+    out: &Path,
+    normals: bool,
+    progress: &(dyn Fn(usize) + Sync),
+    verdict: &dyn Fn(&Tally) -> Result<(), MeshError>,
+) -> Result<Tally, MeshError> {
     let format = format_of(out)?;
     if !format.streams() {
         return Err(MeshError::Input(format!(
@@ -90,8 +102,11 @@ pub fn stream_mesh(
     let tally = if format.extensions().contains(&"stl") {
         stream_stl(plan, &mut f, progress).map_err(at)?
     } else {
-        stream_ply(plan, &mut f, normals, progress).map_err(at)?
+        stream_ply(plan, &mut f, normals, progress, verdict).map_err(at)?
     };
+    if format.extensions().contains(&"stl") {
+        verdict(&tally)?;
+    }
     f.commit()?;
     Ok(tally)
 }
@@ -118,6 +133,7 @@ fn stream_ply(
     f: &mut AtomicFile,
     normals: bool,
     progress: &(dyn Fn(usize) + Sync),
+    verdict: &dyn Fn(&Tally) -> Result<(), MeshError>,
 ) -> Result<Tally, MeshError> {
     let (vp, fp) = (f.scratch_path(), f.scratch_path());
     let create = |p: &Path| -> Result<BufWriter<File>, MeshError> {
@@ -141,6 +157,8 @@ fn stream_ply(
     sink.verts.flush().map_err(io_err)?;
     sink.faces.flush().map_err(io_err)?;
     drop(sink);
+    // Before the parts are joined: a refused mesh costs no more copying.
+    verdict(&tally)?;
     let head = ply::header(tally.vertices, tally.triangles, normals);
     f.write_all(head.as_bytes()).map_err(io_err)?;
     for p in [&vp, &fp] {

@@ -49,10 +49,11 @@ fn bounded_examples_get_a_tight_box_fast() {
         if LOOSE.contains(&f.as_str()) {
             continue;
         }
-        // Generous: the debug-build budget of a loaded 2-core machine.
+        // Generous: a release build on a 2-core machine loaded by the rest
+        // of the test suite (alone, each takes 0.1 to 1 s).
         eprintln!("{f}: {secs:.2} s");
         assert!(
-            secs < 1.0 || std::env::var("MF_SLOW").is_ok(),
+            secs < 5.0 || std::env::var("MF_SLOW").is_ok(),
             "{f}: {secs:.2} s"
         );
         // The true extent: the mesh's bounding box in a box 20 % larger
