@@ -8,14 +8,13 @@
 //! [`std::panic::resume_unwind`]) to stop a stale or over-long job; nothing
 //! here catches that unwind.
 
-use microfrep_analysis::thickness::{PhaseThickness, Thickness, ThicknessStats};
-use microfrep_analysis::{AnalyzeOptions, Report};
+use microfrep_analysis::AnalyzeOptions;
 use microfrep_core::shape::BoundsOptions;
 use microfrep_core::{BatchEval, PointEval, Shape};
 use microfrep_hyperfun::{lower, Diagnostic, Diagnostics, Severity};
 use microfrep_mesh::{memory, MeshOptions, Plan};
 use rayon::prelude::*;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::io::Cursor;
 use std::path::Path;
 use std::sync::{Arc, Once};
@@ -401,77 +400,8 @@ pub fn analyze(
         ..AnalyzeOptions::default()
     };
     let r = microfrep_analysis::analyze(shape, None, grid, &opts, &|_, _, _| check())?;
-    Ok(report_json(&r))
-}
-
-/// The keys and values of `microfrep analyze --json` (crates/cli/src/analyze_cmd.rs).
-fn report_json(r: &Report) -> Value {
-    let g = &r.grid;
-    let m = &r.measures;
-    let conn = r.connectivity.as_ref().map(|c| {
-        json!({
-            "solid_connectivity": 26,
-            "pore_connectivity": 6,
-            "solid_components": c.solid_components,
-            "solid_volumes": c.solid_volumes,
-            "pore_components": c.pore_components,
-            "pore_volume": c.pore_volume,
-            "open_pore_volume": c.open_pore_volume,
-            "open_pore_fraction": c.open_pore_fraction(),
-            "closed_pores": c.closed_pores,
-            "closed_pore_volume": c.closed_pore_volume,
-            "percolates": { "x": c.percolates[0], "y": c.percolates[1], "z": c.percolates[2] },
-            "euler_solid": c.euler,
-            "euler_surface": c.surface_euler(),
-        })
-    });
-    json!({
-        "region": null,
-        "bounds": [g.lo, g.hi],
-        "dims": g.dims,
-        "voxel": g.step,
-        "volume": { "value": r.volume(), "error": r.volume_error(), "coarse": m.volume.coarse },
-        "region_volume": { "value": r.region_volume(), "error": r.region_volume_error() },
-        "volume_fraction": { "value": r.volume_fraction(), "error": r.volume_fraction_error() },
-        "porosity": { "value": r.porosity(), "error": r.volume_fraction_error() },
-        "area": { "value": r.area(), "error": r.area_error(), "coarse": m.area.coarse },
-        "specific_surface": { "value": r.specific_surface(), "error": r.specific_surface_error() },
-        "proven_volume": m.proven_volume,
-        "bricks": { "sampled": m.sampled_bricks, "total": m.bricks },
-        "refine_depth": m.refine_depth,
-        "creased_cells": m.creased_cells,
-        "connectivity": conn,
-        "thickness": r.thickness.as_ref().map(thickness_json),
-        "seconds": { "measure": r.seconds[0], "connectivity": r.seconds[1], "thickness": r.seconds[2] },
-    })
-}
-
-fn thickness_json(t: &Thickness) -> Value {
-    let phase = |p: &PhaseThickness| match p {
-        PhaseThickness::Skipped => json!("skipped"),
-        PhaseThickness::Empty => json!("empty"),
-        PhaseThickness::Unbounded { voxels } => json!({ "unbounded": true, "voxels": voxels }),
-        PhaseThickness::Measured(s) => stats_json(s),
-    };
-    json!({
-        "voxel": t.voxel,
-        "solid": phase(&t.solid),
-        "pore": phase(&t.pore),
-        "slabs": t.slabs,
-        "diameter_cap": t.diameter_cap,
-    })
-}
-
-fn stats_json(s: &ThicknessStats) -> Value {
-    json!({
-        "voxels": s.voxels,
-        "mean": s.mean,
-        "min": s.min,
-        "p10": s.p10,
-        "median": s.median,
-        "p90": s.p90,
-        "max": s.max,
-    })
+    // The keys of `microfrep analyze --json`, as every host reports them.
+    Ok(microfrep_analysis::summary::to_json(&r, "studio", None))
 }
 
 /// The model's value on the plane `axis = value` across the box, as a PNG
