@@ -4,6 +4,24 @@
 //! be pickled and rebuilt on a Dask worker) and holds the documented API;
 //! this module is kept thin: conversions, the GIL released around every
 //! long call, and errors turned into the package's exception classes.
+//!
+//! Build and install it with `pip install ./python` (maturin, from the
+//! repository root) and use it through the Python package, not this module
+//! directly. The crate is a `cdylib` needing a Python interpreter, so its
+//! example is Python rather than a Rust doc test (the package's own tests,
+//! `python/tests/`, exercise these calls):
+//!
+//! ```python
+//! import numpy as np
+//! import microfrep as mf
+//!
+//! ball = mf.sphere((0, 0, 0), 1.0)                  # millimetres; inside is f >= 0
+//! values = ball.eval(np.array([[0, 0, 0], [2, 0, 0]], dtype=np.float32))
+//! assert values[0] > 0 > values[1]                  # centre inside, far point outside
+//! vertices, faces = ball.mesh(resolution=32)        # NumPy arrays
+//! ```
+
+#![warn(missing_docs)]
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;

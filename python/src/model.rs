@@ -24,6 +24,7 @@ pub struct PyExpr {
 #[pyclass(name = "Shape", module = "microfrep._core", frozen)]
 #[derive(Clone)]
 pub struct PyShape {
+    /// The model itself: its value, attribute channels and bounds.
     pub s: Shape,
     /// What it is called in messages: the source, or "model".
     pub name: String,
@@ -34,6 +35,8 @@ pub struct PyShape {
 }
 
 impl PyShape {
+    /// Wraps a shape built from Python operations rather than loaded from a
+    /// source: named "model" in messages, without loader notes, kind "built".
     pub fn built(s: Shape) -> PyShape {
         PyShape {
             s,

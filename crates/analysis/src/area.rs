@@ -12,9 +12,14 @@ use microfrep_core::geom::{cross, norm, sub};
 /// the edge `(i, j)` at parameter `t` from `i`, in cyclic order.
 #[derive(Clone, Copy, Debug)]
 pub struct IsoPolygon {
+    /// Number of polygon vertices: 0 when the tetrahedron is not cut, 3 for a
+    /// triangle (1-3 sign split), 4 for a quadrilateral (2-2 split).
     pub n: usize,
     /// Vertices of the tetrahedron with `f >= 0`.
     pub inside: usize,
+    /// The polygon's vertices as `(i, j, t)`: on the edge from tetrahedron
+    /// vertex `i` to vertex `j`, at parameter `t` in `[0, 1]` measured from `i`.
+    /// Only the first `n` entries are meaningful.
     pub verts: [(usize, usize, f64); 4],
 }
 

@@ -2,6 +2,9 @@
 
 use thiserror::Error;
 
+/// Why an analysis was refused. Every variant carries a message for people
+/// that names the offending value (bounds, resolution, voxel size, or the
+/// predicted and allowed bytes); nothing is computed when one is returned.
 #[derive(Debug, Error)]
 pub enum AnalysisError {
     /// Bad bounds, resolution, voxel size or other input.
@@ -12,4 +15,5 @@ pub enum AnalysisError {
     Memory(String),
 }
 
+/// The crate's result type, [`AnalysisError`] by default.
 pub type Result<T, E = AnalysisError> = std::result::Result<T, E>;

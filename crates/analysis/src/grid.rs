@@ -46,7 +46,11 @@ pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 /// A regular grid of voxels tiling a box exactly.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
+    /// Lower corner of the box in model units (millimetres); voxel `(0, 0, 0)`
+    /// starts here.
     pub lo: [f64; 3],
+    /// Upper corner of the box in model units; `lo[a] + dims[a] * step[a]`
+    /// equals it up to rounding.
     pub hi: [f64; 3],
     /// Voxels per axis (even).
     pub dims: [usize; 3],
@@ -172,6 +176,7 @@ pub fn classify_box(ev: &mut IntervalEval, lo: [f64; 3], hi: [f64; 3]) -> Class 
 pub struct Sampler {
     solid: Tape,
     region: Option<Tape>,
+    /// The grid whose voxel centres are sampled.
     pub grid: Grid,
 }
 

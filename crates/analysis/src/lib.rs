@@ -24,6 +24,8 @@
 //! call), `partial` (the same measures on ranges of
 //! voxel layers, merged exactly: for distributed runs).
 
+#![warn(missing_docs)]
+
 pub mod area;
 pub mod attributes;
 pub mod connectivity;

@@ -58,6 +58,7 @@ pub struct Measures {
     /// features), and its standard deviation: a check on `volume`, which
     /// misses features that fall between the grid's nodes.
     pub sampled_volume: f64,
+    /// Standard deviation of `sampled_volume`, in cubic model units.
     pub sampled_volume_error: f64,
     /// Bricks sampled, of all.
     pub sampled_bricks: usize,
@@ -66,6 +67,8 @@ pub struct Measures {
     /// Voxels (and coarse voxels) found creased or sharply curved, which
     /// were refined.
     pub creased_cells: usize,
+    /// Bricks of the grid in all (sampled ones and those proven full or empty
+    /// by intervals).
     pub bricks: usize,
 }
 

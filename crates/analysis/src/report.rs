@@ -12,8 +12,13 @@ use std::time::Instant;
 /// What to compute, and within which memory.
 #[derive(Clone, Debug)]
 pub struct AnalyzeOptions {
+    /// Label connected components of solid and pore space and compute the
+    /// Euler characteristic ([`Report::connectivity`]); on by default.
     pub connectivity: bool,
+    /// Compute the local thickness of solid and pores
+    /// ([`Report::thickness`]); on by default, and the most expensive stage.
     pub thickness: bool,
+    /// Options of the thickness stage (bin width, memory, phases, work budget).
     pub thickness_options: ThicknessOptions,
     /// Most bytes the voxel stages may use; jobs predicted to need more are
     /// refused before they start.
@@ -43,6 +48,8 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// The stage's name for progress messages, in lower case
+    /// (for example `"volume and area"`).
     pub fn name(self) -> &'static str {
         match self {
             Stage::Measure => "volume and area",
@@ -55,11 +62,17 @@ impl Stage {
 /// Results of [`analyze`].
 #[derive(Clone, Debug)]
 pub struct Report {
+    /// The grid all figures were computed on (box in model units, voxels per
+    /// axis and voxel size).
     pub grid: Grid,
     /// Whether the figures are inside a region model (else the bounds).
     pub region: bool,
+    /// Volume, region volume and area with their coarse-grid estimates, and
+    /// the random-sample check on the volume.
     pub measures: Measures,
+    /// Components and Euler characteristic; `None` when not asked for.
     pub connectivity: Option<Connectivity>,
+    /// Local thickness of solid and pores; `None` when not asked for.
     pub thickness: Option<Thickness>,
     /// Every attribute channel's integral, mean, minimum and maximum over
     /// the solid (empty for shapes without channels).
@@ -104,6 +117,8 @@ impl Report {
         self.measures.region_volume.value
     }
 
+    /// Error estimate of [`Report::region_volume`] (cubic model units), from
+    /// the difference between the fine and the coarse grid.
     pub fn region_volume_error(&self) -> f64 {
         self.measures.region_volume.error()
     }
@@ -119,6 +134,8 @@ impl Report {
         }
     }
 
+    /// Error bound of [`Report::volume_fraction`], propagated from the volume
+    /// and region-volume errors (dimensionless); NaN for an empty region.
     pub fn volume_fraction_error(&self) -> f64 {
         let r = self.region_volume();
         if r > 0.0 {
@@ -139,6 +156,9 @@ impl Report {
         self.measures.area.value
     }
 
+    /// Error estimate of [`Report::area`] in square model units: a third of the
+    /// smooth fine-minus-coarse difference plus the whole difference from
+    /// cells around creases.
     pub fn area_error(&self) -> f64 {
         self.measures.area.error()
     }
@@ -152,6 +172,8 @@ impl Report {
         }
     }
 
+    /// Error bound of [`Report::specific_surface`] (per model unit), from the
+    /// relative errors of area and volume added; NaN without solid.
     pub fn specific_surface_error(&self) -> f64 {
         let (a, v) = (self.area(), self.volume());
         if v > 0.0 {

@@ -18,6 +18,8 @@ pub fn header(min: [f64; 3], max: [f64; 3], layers: usize) -> String {
     )
 }
 
+/// Closes the geometry section opened by [`header`]; the last text of a
+/// CLI file, after every [`layer_block`].
 pub const FOOTER: &str = "$$GEOMETRYEND\n";
 
 /// One layer's block: `$$LAYER/z` and a `$$POLYLINE` per loop.
@@ -38,20 +40,34 @@ pub fn layer_block(z: f64, polys: &[Polygon]) -> String {
 /// with their first point).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Polyline {
+    /// Label (part) id the polyline belongs to; the writer uses 1 throughout.
     pub id: u32,
+    /// Direction: 1 an outer boundary (counter-clockwise), 0 a hole
+    /// (clockwise), 2 an open polyline; other values are rejected on reading.
     pub dir: u8,
+    /// Points `[x, y]` in file units (multiply by [`CliFile::units`] for
+    /// millimetres), as many as the `$$POLYLINE` line declares.
     pub points: Vec<[f64; 2]>,
 }
 
+/// One `$$LAYER` block as read back: its height and its polylines in file
+/// order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CliLayer {
+    /// The `$$LAYER` height in file units: the top of the layer (contours were
+    /// taken at its middle).
     pub z: f64,
+    /// The layer's polylines (may be empty for a layer without material).
     pub polylines: Vec<Polyline>,
 }
 
+/// An ASCII CLI file as read back by [`read_cli`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct CliFile {
+    /// The `$$UNITS` value: millimetres per file unit (1 for files this crate
+    /// writes). Coordinates are kept in file units, not scaled.
     pub units: f64,
+    /// The layers in file order, as many as `$$LAYERS` declared.
     pub layers: Vec<CliLayer>,
 }
 

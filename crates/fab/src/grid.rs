@@ -14,11 +14,18 @@ const MAX_LAYERS: usize = 1 << 20;
 /// grown to a whole number of pixels and layers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SliceGrid {
+    /// Outer corner of the grid in model units (millimetres): the lower x, y of
+    /// pixel `(0, 0)` and the bottom of layer 0.
     pub min: [f64; 3],
+    /// Side of the square pixels in x and y, model units (> 0).
     pub pixel: f64,
+    /// Layer thickness along z, model units (> 0).
     pub layer: f64,
+    /// Pixels per row (along x), at least 1.
     pub nx: usize,
+    /// Pixel rows (along y), at least 1.
     pub ny: usize,
+    /// Number of layers (along z), at least 1.
     pub layers: usize,
 }
 
@@ -34,6 +41,16 @@ fn count(len: f64, step: f64, what: &str, max: usize) -> Result<usize> {
 }
 
 impl SliceGrid {
+    /// The grid covering the box `min..max` (model units) with layers of
+    /// thickness `layer` and pixels of side `pixel`; counts are rounded up, so
+    /// the grid may reach a little past `max`.
+    ///
+    /// # Errors
+    /// [`FabError::Invalid`] when a size is not a positive number, the box is
+    /// not finite with `min < max` on every axis, a pixel or layer is larger
+    /// than the box, f32 samples could not resolve the steps at the box's
+    /// coordinates, or the image side (65536), pixel count (2^28) or layer
+    /// count (2^20) would exceed its limit.
     pub fn new(min: [f64; 3], max: [f64; 3], layer: f64, pixel: f64) -> Result<SliceGrid> {
         for (name, v) in [("layer", layer), ("pixel", pixel)] {
             if !(v.is_finite() && v > 0.0) {

@@ -8,9 +8,14 @@ use std::path::Path;
 /// Greyscale image rows, top row first, one byte per pixel (0 or 255 for
 /// binary images).
 pub struct GreyImage {
+    /// Pixels per row.
     pub width: usize,
+    /// Rows.
     pub height: usize,
+    /// Whether the image is 1-bit (pixels only 0 or 255, written as a 1-bit PNG)
+    /// rather than 8-bit coverage.
     pub binary: bool,
+    /// `width * height` bytes, row-major, top row (largest y) first.
     pub pixels: Vec<u8>,
 }
 

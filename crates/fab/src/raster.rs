@@ -15,17 +15,26 @@ const LEAF: usize = 16;
 /// of tiles proven inside hold `+inf`, proven outside `-inf`; the others hold
 /// the sampled value. Inside is `v >= 0` either way.
 pub struct LayerValues {
+    /// Pixels per row (the grid's `nx`).
     pub nx: usize,
+    /// Rows (the grid's `ny`).
     pub ny: usize,
+    /// Height of the sampled plane, the layer's middle, in model units.
     pub z: f64,
+    /// `nx * ny` values, index `j * nx + i` for column `i`, row `j`.
     pub values: Vec<f32>,
 }
 
 impl LayerValues {
+    /// Value at pixel column `i`, row `j` (row 0 at the lowest y); `+inf` or
+    /// `-inf` in tiles proven inside or outside. Panics when `i >= nx` or
+    /// `j >= ny`.
     pub fn at(&self, i: usize, j: usize) -> f32 {
         self.values[j * self.nx + i]
     }
 
+    /// Whether pixel `(i, j)` is inside the model (value `>= 0`; NaN counts as
+    /// outside). Panics out of range like [`LayerValues::at`].
     pub fn inside(&self, i: usize, j: usize) -> bool {
         self.at(i, j) >= 0.0
     }

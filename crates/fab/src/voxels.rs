@@ -13,10 +13,15 @@ use std::path::Path;
 /// disk-filling run.
 const MAX_VOXELS: usize = 1 << 32;
 
+/// The file formats of [`write_voxels`], chosen by the output's extension.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum VoxelFormat {
+    /// Bare voxel bytes (`.raw`), with a `.json` sidecar giving dimensions,
+    /// spacing, origin and value type.
     Raw,
+    /// Legacy VTK structured points (`.vtk`) with binary data.
     Vtk,
+    /// NRRD (`.nrrd`): a text header followed by the raw voxel bytes.
     Nrrd,
 }
 
@@ -39,12 +44,24 @@ impl VoxelFormat {
 /// centre at `origin`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VoxelGrid {
+    /// Voxels per axis, each at least 1.
     pub dims: [usize; 3],
+    /// Side of the cubic voxels, model units (millimetres).
     pub spacing: f64,
+    /// Centre of voxel `(0, 0, 0)` in model units: half a voxel inside the box's
+    /// lower corner.
     pub origin: [f64; 3],
 }
 
 impl VoxelGrid {
+    /// The grid of cubic voxels of side `voxel` covering `min..max` (model
+    /// units); counts are rounded up, so the grid may reach a little past `max`.
+    ///
+    /// # Errors
+    /// [`FabError::Invalid`] when `voxel` is not a positive number, the box is
+    /// not finite with `min < max`, a voxel is larger than a side of the box,
+    /// f32 samples could not resolve the voxel size at the box's coordinates,
+    /// or there would be more than 2^32 voxels.
     pub fn new(min: [f64; 3], max: [f64; 3], voxel: f64) -> Result<VoxelGrid> {
         if !(voxel.is_finite() && voxel > 0.0) {
             return Err(FabError::Invalid(format!(

@@ -4,9 +4,15 @@
 use crate::Mesh;
 use rayon::prelude::*;
 
+/// What [`check`] found in a mesh: element counts, defects, the Euler
+/// characteristic and the enclosed volume and area (model units). A mesh of
+/// a solid is sound when [`CheckReport::is_closed_manifold`] holds; a
+/// connected one then has genus `(2 - euler) / 2`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CheckReport {
+    /// Number of vertices.
     pub vertices: usize,
+    /// Number of triangles.
     pub triangles: usize,
     /// Undirected edges.
     pub edges: usize,
@@ -23,6 +29,7 @@ pub struct CheckReport {
     pub euler: i64,
     /// Signed volume (positive for outward orientation).
     pub volume: f64,
+    /// Total area of the triangles, in square model units.
     pub area: f64,
     /// Bounding box of the vertices (min, max).
     pub bbox: [[f64; 3]; 2],

@@ -5,6 +5,10 @@
 
 use crate::MeshError;
 
+/// The mesher's uniform grid: node `i` at `origin + h * i` (model units),
+/// `cells[a] + 1` nodes per axis, cut into cubic bricks of `brick` cells
+/// (the last brick on an axis may be shorter). Made by [`Grid::new`], which
+/// checks the bounds and resolution.
 #[derive(Clone, Debug)]
 pub struct Grid {
     /// Position of node (0, 0, 0).
@@ -105,6 +109,7 @@ impl Grid {
         Ok(n as usize)
     }
 
+    /// Position of node `i` in model units (no bounds check).
     pub fn node_pos(&self, i: [usize; 3]) -> [f64; 3] {
         std::array::from_fn(|a| self.origin[a] + self.h * i[a] as f64)
     }
@@ -116,6 +121,8 @@ impl Grid {
         i[0] as u64 + nx * (i[1] as u64 + ny * i[2] as u64)
     }
 
+    /// Node coordinates of linear index `k`: the inverse of
+    /// [`Grid::node_index`].
     pub fn node_from_index(&self, k: u64) -> [usize; 3] {
         let nx = self.cells[0] as u64 + 1;
         let ny = self.cells[1] as u64 + 1;
@@ -126,14 +133,18 @@ impl Grid {
         ]
     }
 
+    /// Number of bricks of the grid, all axes together.
     pub fn brick_count(&self) -> usize {
         self.bricks.iter().product()
     }
 
+    /// Linear index of the brick at coordinates `b`, x fastest.
     pub fn brick_index(&self, b: [usize; 3]) -> usize {
         b[0] + self.bricks[0] * (b[1] + self.bricks[1] * b[2])
     }
 
+    /// Brick coordinates of linear index `k`: the inverse of
+    /// [`Grid::brick_index`].
     pub fn brick_coords(&self, k: usize) -> [usize; 3] {
         let [bx, by, _] = self.bricks;
         [k % bx, (k / bx) % by, k / (bx * by)]

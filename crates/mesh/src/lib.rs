@@ -25,6 +25,8 @@
 //! assert!(r.is_closed_manifold() && r.euler == 2);
 //! ```
 
+#![warn(missing_docs)]
+
 mod brick;
 pub mod check;
 mod classify;
@@ -46,6 +48,9 @@ pub use grid::Grid;
 use microfrep_core::{Expr, GradBatchEval, Shape, Tape};
 use rayon::prelude::*;
 
+/// Why a meshing job was refused or failed. Input and size problems are
+/// found before any large allocation; `Empty` and `VolumeLoss` after the
+/// mesh was made, in which case no output file is left behind.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// A bad option or model for meshing (no underlying error).
@@ -88,10 +93,14 @@ pub enum MeshError {
 /// outside.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions in model units (millimetres), f32 as in STL and 3MF.
     pub vertices: Vec<[f32; 3]>,
+    /// Triangles as three indices into `vertices`.
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// What to mesh and how: the box, the resolution and the method. Start
+/// from [`MeshOptions::new`] and change fields as needed.
 #[derive(Clone, Debug)]
 pub struct MeshOptions {
     /// Box to mesh (min, max); the solid is clipped to it.
@@ -150,6 +159,11 @@ impl CellMethod {
 }
 
 impl MeshOptions {
+    /// Options for meshing the box `bounds` (min, max; model units) with
+    /// `resolution` cells on its longest side: bricks of 32 cells, marching
+    /// cubes, per-brick tape simplification and volume correction on, and the
+    /// memory limit of the environment. Nothing is checked here;
+    /// [`Plan::new`] rejects bad values.
     pub fn new(bounds: [[f64; 3]; 2], resolution: usize) -> Self {
         MeshOptions {
             bounds,
@@ -168,6 +182,8 @@ impl MeshOptions {
 pub struct Plan {
     /// The model clipped to the box (output 0), with its other outputs.
     pub tape: Tape,
+    /// The grid of cells the model is sampled on (one cell of padding beyond
+    /// the box on every side).
     pub grid: Grid,
     /// The box meshed: vertices are kept inside it.
     pub bounds: [[f64; 3]; 2],
@@ -181,6 +197,16 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Checks the options, clips the model to the box and classifies every
+    /// brick by interval arithmetic (full, empty or surface); the dense
+    /// sampling is left to [`Plan::run`].
+    ///
+    /// # Errors
+    /// [`MeshError::Input`] for a brick size outside 2..=256, bounds that are
+    /// not finite with min < max, a resolution outside 1..=65533, or cells too
+    /// small for f32 coordinates at the box's position;
+    /// [`MeshError::TooLarge`] when the brick table alone exceeds
+    /// [`MeshOptions::memory_limit`].
     pub fn new(shape: &Shape, opts: &MeshOptions) -> Result<Plan, MeshError> {
         let (tape, grid) = Plan::frame(shape, opts)?;
         Plan::classified(tape, grid, opts)

@@ -28,9 +28,14 @@ pub const GIB: f64 = (1u64 << 30) as f64;
 /// Bytes held whatever the job: the tape, thread pools, buffers.
 const FIXED: f64 = 64e6;
 
+/// A meshing job's predicted output size and peak memory, from
+/// [`estimate`] or [`estimate_grid`]; the counts are estimates from a
+/// coarse sampling, not exact.
 #[derive(Clone, Copy, Debug)]
 pub struct Estimate {
+    /// Predicted number of triangles.
     pub triangles: f64,
+    /// Predicted number of vertices.
     pub vertices: f64,
     /// Peak bytes of the job meshed into memory, everything included.
     pub bytes: f64,

@@ -7,6 +7,9 @@ use crate::{Mesh, MeshError};
 /// The vertices a batch of triangles may use: two consecutive runs of the
 /// global vertex numbering.
 pub struct VertexWindow<'a> {
+    /// `(first, positions)` for each run: the global index of its first vertex
+    /// and the positions from there on. The second run starts after the first;
+    /// an unused second run starts at `u32::MAX` with no positions.
     pub runs: [(u32, &'a [[f32; 3]]); 2],
 }
 
@@ -25,13 +28,18 @@ impl VertexWindow<'_> {
 /// Receives a mesh in order: every vertex before any triangle that uses it,
 /// vertices and triangles each in their global order.
 pub trait MeshSink {
+    /// Takes the next vertices in global order: the first of `v` has the index
+    /// one past the last vertex received before.
     fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError>;
+    /// Takes the next triangles, with global vertex indices, counter-clockwise
+    /// seen from outside; `window` holds the position of every vertex they use.
     fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError>;
 }
 
 /// Collects the whole mesh in memory.
 #[derive(Default)]
 pub struct Collect {
+    /// The vertices and triangles received so far.
     pub mesh: Mesh,
 }
 
@@ -51,10 +59,13 @@ impl MeshSink for Collect {
 /// a mesh that is never held whole.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tally {
+    /// Vertices passed through.
     pub vertices: u64,
+    /// Triangles passed through.
     pub triangles: u64,
     /// Signed volume (divergence theorem) and area, f64 sums in order.
     pub volume: f64,
+    /// Total triangle area in square model units.
     pub area: f64,
     /// Bounding box of the vertices (min, max).
     pub bbox: [[f64; 3]; 2],
@@ -91,7 +102,9 @@ pub fn volume_area_of(t: [[f32; 3]; 3]) -> (f64, f64) {
 
 /// A sink that tallies and forwards to `inner`.
 pub struct Tallying<'a> {
+    /// The sink everything is forwarded to, unchanged.
     pub inner: &'a mut (dyn MeshSink + Send),
+    /// Counts and measures of what has passed so far.
     pub tally: Tally,
 }
 

@@ -108,10 +108,17 @@ fn tet_triangles(tet: [u8; 4], inside: &[u8], out: &mut Vec<[CellEdge; 3]>) {
 /// Triangles for each of the 256 corner sign patterns of a cell (bit c set
 /// when corner c is inside): `tris[start[m]..start[m + 1]]`.
 pub struct CellTable {
+    /// Offsets into `tris`, one per sign pattern and one past the end
+    /// (`start[256] == tris.len()`).
     pub start: [u16; 257],
+    /// Triangles, each as the three cell edges its vertices lie on,
+    /// counter-clockwise seen from outside the solid.
     pub tris: Vec<[CellEdge; 3]>,
 }
 
+/// The marching-tetrahedra table: every cube cut into the six tetrahedra
+/// of the Kuhn split around its main diagonal, each tetrahedron's zero set
+/// triangulated and oriented outward. Built on first use and shared.
 pub fn cell_table() -> &'static CellTable {
     static TABLE: OnceLock<CellTable> = OnceLock::new();
     TABLE.get_or_init(|| {

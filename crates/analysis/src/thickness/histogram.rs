@@ -21,12 +21,19 @@ pub struct Histogram {
 pub struct ThicknessStats {
     /// Voxels of the phase.
     pub voxels: u64,
+    /// Mean diameter over the phase's voxels (volume-weighted), model units.
     pub mean: f64,
+    /// Smallest diameter of any voxel, model units.
     pub min: f64,
+    /// 10th percentile of the diameters (nearest rank), model units.
     pub p10: f64,
+    /// Median diameter (50th percentile, nearest rank), model units.
     pub median: f64,
+    /// 90th percentile of the diameters (nearest rank), model units.
     pub p90: f64,
+    /// Largest diameter of any voxel (at most the cap), model units.
     pub max: f64,
+    /// Voxel counts per diameter bin.
     pub histogram: Histogram,
     /// Voxels whose ball reached the slab halo: their diameter is only known
     /// to be at least the cap (see [`super::Thickness::diameter_cap`]); they

@@ -82,6 +82,9 @@ pub const MIN_HALO: usize = 4;
 const WINDOW_BYTES: u64 = 13;
 const SLAB_BYTES: u64 = 5;
 
+/// How the local thickness is measured: histogram bins, the memory and
+/// work allowed, and which phases. The default measures both phases
+/// exactly where the work budget allows, within 2 GiB.
 #[derive(Clone, Debug)]
 pub struct ThicknessOptions {
     /// Histogram bin width in model units; `None`: one voxel.
@@ -91,6 +94,7 @@ pub struct ThicknessOptions {
     /// Which phases to measure (both by default); a phase left out is
     /// [`PhaseThickness::Skipped`].
     pub measure_solid: bool,
+    /// Measure the pore space (pore size distribution); on by default.
     pub measure_pore: bool,
     /// Rows of exact ball painting allowed per voxel (see
     /// [`ThicknessStats::exact_up_to`]); `f64::INFINITY`: always exact.
@@ -118,12 +122,15 @@ pub enum PhaseThickness {
     Empty,
     /// The phase fills the grid: no wall anywhere, no finite thickness.
     Unbounded {
+        /// Voxels of the phase (the whole grid).
         voxels: u64,
     },
+    /// The phase's diameter distribution.
     Measured(ThicknessStats),
 }
 
 impl PhaseThickness {
+    /// The distribution when the phase was measured, else `None`.
     pub fn stats(&self) -> Option<&ThicknessStats> {
         match self {
             PhaseThickness::Measured(s) => Some(s),
@@ -137,6 +144,7 @@ impl PhaseThickness {
 pub struct Thickness {
     /// Voxel side used for the diameters (the largest of the grid's steps).
     pub voxel: f64,
+    /// Voxels per axis of the grid the distribution was taken on.
     pub dims: [usize; 3],
     /// Strut and wall thickness.
     pub solid: PhaseThickness,
