@@ -8,7 +8,9 @@
 //! build and the whole field build of a 1M-triangle sphere, and the peak
 //! resident memory of this process (VmHWM) after it. libigl runs from
 //! `target/libigl-venv` (or `MICROFREP_LIBIGL_PYTHON`), created on first
-//! use; its columns read `na` if that fails.
+//! use; its columns read `na` if that fails. Last, `fill` end to end: a
+//! 100k-triangle torus part filled with a 2 mm gyroid and meshed at 0.1 mm
+//! to STL (target under 30 s), with its peak memory.
 
 use microfrep_core::Field;
 use microfrep_meshfield::bvh::Bvh;
@@ -40,7 +42,90 @@ pub fn run() -> Result<(), String> {
     } else {
         eprintln!("bench/run parts: ../shared/meshes/femur.stl not found; query cases skipped");
     }
-    build_1m(&pool)
+    build_1m(&pool)?;
+    fill_part(&pool, &dir)
+}
+
+/// The main job end to end on a part of about 100k triangles: a torus
+/// (major radius 12 mm, minor 5 mm) meshed by microfrep to STL, read back
+/// as a mesh part, filled with a 2 mm gyroid network at 30 % inside a
+/// 0.3 mm skin, and meshed at 0.1 mm cells to STL, as `microfrep fill PART
+/// --structure gyroid --cell 2 --density 0.3 --shell 0.3 --voxel 0.1 -o
+/// OUT.stl` does (figures excluded). Target: under 30 s.
+fn fill_part(pool: &rayon::ThreadPool, dir: &Path) -> Result<(), String> {
+    use microfrep::fill::{fill, Density, FillOptions, Structure};
+    use microfrep::mesh::job::{mesh_to_file, JobOptions};
+    use microfrep::mesh::{Grid, MeshOptions};
+    use microfrep_shapes as prims;
+    let part = dir.join("torus_part.stl");
+    let torus = microfrep_core::Shape::new(prims::torus(
+        &microfrep_core::Expr::xyz(),
+        &prims::v3([0.0; 3]),
+        2,
+        12.0,
+        5.0,
+    ));
+    let pb = [[-17.5, -17.5, -5.5], [17.5, 17.5, 5.5]];
+    let ps = pool
+        .install(|| {
+            mesh_to_file(
+                &torus,
+                &MeshOptions::new(pb, 135),
+                &part,
+                &JobOptions::default(),
+                &|_, _| {},
+            )
+        })
+        .map_err(|e| e.to_string())?;
+    let opts = FillOptions {
+        structure: Structure::parse("gyroid", false).ok_or("no gyroid")?,
+        cell: 2.0,
+        density: Density::Constant(0.3),
+        skin: Some(0.3),
+        seed: 1,
+    };
+    let out = dir.join("torus_gyroid.stl");
+    let _ = std::fs::remove_file(&out);
+    drop(torus);
+    // The peak from here on is this job's (Linux resets VmHWM on "5").
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    let t = Instant::now();
+    let (filled_s, m) = pool.install(|| -> Result<_, String> {
+        let f = fill(
+            part.to_str().ok_or("path")?,
+            &Default::default(),
+            &opts,
+            &|_, _, _| {},
+        )
+        .map_err(|e| e.to_string())?;
+        let filled_s = t.elapsed().as_secs_f64();
+        let b = f.model.shape.bounds().map_err(|e| e.to_string())?.corners();
+        let n = Grid::resolution_for_voxel(b, 0.1).map_err(|e| e.to_string())?;
+        let m = mesh_to_file(
+            &f.model.shape,
+            &MeshOptions::new(b, n),
+            &out,
+            &JobOptions::default(),
+            &|_, _| {},
+        )
+        .map_err(|e| e.to_string())?;
+        Ok((filled_s, m))
+    })?;
+    let total_s = t.elapsed().as_secs_f64();
+    let bytes = std::fs::metadata(&out).map(|m| m.len()).unwrap_or(0);
+    println!(
+        "RESULT parts_fill_torus_gyroid part_triangles={} cell_mm=2 density=0.3 skin_mm=0.3 voxel_mm=0.1 \
+         resolution={} threads=2 load_and_fill_s={filled_s:.2} total_s={total_s:.2} target_s=30 \
+         triangles={} bad_edges={} stl_mib={:.0} peak_mib={:.0}",
+        ps.triangles,
+        m.resolution,
+        m.triangles,
+        m.bad_edges.map_or("na".to_string(), |b| b.to_string()),
+        bytes as f64 / (1u64 << 20) as f64,
+        peak_mib(),
+    );
+    let _ = std::fs::remove_file(&out);
+    Ok(())
 }
 
 /// Splitmix64 points uniform in the bbox grown by 10 %.
