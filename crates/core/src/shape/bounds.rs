@@ -185,7 +185,7 @@ pub(crate) fn find(tape: &Tape, opts: &BoundsOptions) -> Result<Bounds, BoundsEr
         std::array::from_fn(|a| first[1][a] + pad[a]),
     ];
     let b = match octree_boxes(&mut s, again) {
-        Some(live) => meet(tighten(&mut s, live), first),
+        Some(live) => meet(hull(&live), first),
         None => first,
     };
     let b = shrink_faces(&mut s, b);
@@ -270,49 +270,6 @@ fn octree_boxes(s: &mut Search, b: Box3) -> Option<Vec<Box3>> {
         live = next;
     }
     Some(live)
-}
-
-/// Interval evaluations allowed for tightening one face.
-const FACE_EVALS: usize = 0;
-
-/// Pushes each face of the boxes' hull inwards by refining the boxes that
-/// define it (the outermost first) and dropping children proven empty,
-/// until the outermost box is smaller than a thousandth of the hull (the
-/// face is then known to that precision) or the face's evaluations are
-/// spent. Returns the new hull.
-fn tighten(s: &mut Search, mut live: Vec<Box3>) -> Box3 {
-    for a in 0..3 {
-        for side in 0..2 {
-            let h = hull(&live);
-            let tol = 1e-3 * (h[1][a] - h[0][a]).max(f64::MIN_POSITIVE);
-            // Outermost along (a, side) first: a max-heap on the face coordinate.
-            let key = |b: &Box3| if side == 1 { b[1][a] } else { -b[0][a] };
-            let mut evals = 0;
-            loop {
-                if s.exhausted() || evals >= FACE_EVALS || live.is_empty() {
-                    break;
-                }
-                let (i, _) = live
-                    .iter()
-                    .enumerate()
-                    .max_by(|x, y| key(x.1).total_cmp(&key(y.1)))
-                    .expect("not empty");
-                let b = live[i];
-                let ext = (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max);
-                if ext < tol {
-                    break;
-                }
-                live.swap_remove(i);
-                for c in children(&b) {
-                    evals += 1;
-                    if s.may_hold(&c) {
-                        live.push(c);
-                    }
-                }
-            }
-        }
-    }
-    hull(&live)
 }
 
 /// Moves each face of `b` inwards by bisection on the thickness of the

@@ -68,6 +68,10 @@ fn bounded_examples_get_a_tight_box_fast() {
             .run(&|_| {})
             .unwrap();
         let r = summary(&mesh);
+        let worst = (0..3)
+            .map(|a| size[a] / (r.bbox[1][a] - r.bbox[0][a]))
+            .fold(0.0, f64::max);
+        eprintln!("{f}: box / extent {worst:.4}");
         for a in 0..3 {
             let true_side = r.bbox[1][a] - r.bbox[0][a];
             // A mesh cell of slack (the mesh samples at nodes).
