@@ -42,6 +42,11 @@ pub struct MeshArgs {
     /// or tets (marching tetrahedra: sharp creases cut less).
     #[arg(long, value_enum, default_value_t = Cells::Cubes)]
     cells: Cells,
+    /// Write a strut lattice model (mfStruts at the plain point, constant
+    /// cell and radius, alone or `&` a part) to .3mf as triangles instead
+    /// of a beam lattice.
+    #[arg(long)]
+    triangles: bool,
     #[command(flatten)]
     volume: VolumeArgs,
     #[command(flatten)]
@@ -88,6 +93,32 @@ pub fn run(a: MeshArgs) -> Result<()> {
         (None, Some(v)) => (Grid::resolution_for_voxel(b, v)?, None),
         (None, None) => (256, None),
     };
+    let is_3mf = a
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("3mf"));
+    if is_3mf && !a.triangles && volume.is_none() {
+        if let Some(sm) = microfrep::export::strut_model_of(&m.shape) {
+            let n = if resolution == 0 { 256 } else { resolution };
+            let (beams, nodes) = microfrep::export::strut_model_3mf(&sm, bounds, n, &a.output)?;
+            check_terminates(&m, &[&a.output])?;
+            let out = a.output.display().to_string();
+            if a.run.json {
+                let j = serde_json::json!({ "output": out, "kind": "beam-lattice",
+                    "lattice": sm.kind.name(), "cell": sm.cell, "radius": sm.radius,
+                    "beams": beams, "nodes": nodes, "clipped": sm.part.is_some() });
+                println!("{j}");
+            } else if !a.run.quiet {
+                println!(
+                    "wrote {out} (beam lattice: {beams} {} beams on {nodes} nodes, radius {}, cell {}; --triangles writes the mesh)",
+                    sm.kind.name(),
+                    sm.radius,
+                    sm.cell
+                );
+            }
+            return Ok(());
+        }
+    }
     if !(a.max_volume_loss >= 0.0 && a.max_volume_loss <= 100.0) {
         anyhow::bail!(
             "--max-volume-loss {}: give a percentage from 0 to 100",

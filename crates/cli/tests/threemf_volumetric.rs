@@ -443,3 +443,75 @@ fn misuse_is_refused_clearly_and_writes_nothing() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--triangles"), "{err}");
 }
+
+#[test]
+fn a_strut_model_meshes_to_a_beam_lattice_unless_triangles() {
+    let d = dir("struts");
+    let model = d.join("octet.hf");
+    let bare = d.join("bare.hf");
+    let moved = d.join("moved.hf");
+    let body = |x: &str, part: &str| {
+        format!(
+            "my_model(x[3], a[1]) {{\n  array xt[3];\n  xt[1] = x[1] + 0.1; xt[2] = x[2]; xt[3] = x[3];\n  \
+             ball = 1 - x[1]^2 - x[2]^2 - x[3]^2;\n  my_model = mfStruts({x}, 4, 0.5, 0.05){part};\n}}\n"
+        )
+    };
+    std::fs::write(&model, body("x", " & ball")).unwrap();
+    std::fs::write(&bare, body("x", "")).unwrap();
+    std::fs::write(&moved, body("xt", " & ball")).unwrap();
+    let out = d.join("octet.3mf");
+    let o = ok(&[
+        "mesh",
+        model.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--resolution",
+        "40",
+        "--json",
+    ]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["kind"], "beam-lattice", "{j}");
+    let m = microfrep::threemf::read_file(&out).unwrap();
+    microfrep::threemf::validate(&m).unwrap();
+    let lat = microfrep::threemf::lattices(&m).unwrap();
+    assert_eq!(lat.len(), 1);
+    assert_eq!(lat[0].beams.len() as u64, j["beams"].as_u64().unwrap());
+    assert!(lat[0].beams.len() > 500, "{}", lat[0].beams.len());
+    // Every beam lies on a strut of the model: the bare lattice's value
+    // (radius minus the distance to the nearest strut axis) is the radius
+    // at both ends and the middle.
+    let lattice = load::load(bare.to_str().unwrap(), &LoadOptions::default()).unwrap();
+    let mut pe = lattice.shape.point();
+    for b in &lat[0].beams {
+        assert!((b.r1 - 0.05).abs() < 1e-12 && (b.r2 - 0.05).abs() < 1e-12);
+        let (p, q) = (lat[0].nodes[b.v1 as usize], lat[0].nodes[b.v2 as usize]);
+        for t in [0.0, 0.5, 1.0] {
+            let x: [f64; 3] = std::array::from_fn(|a| p[a] + t * (q[a] - p[a]));
+            let v = pe.eval(x);
+            assert!((v - 0.05).abs() < 1e-9, "beam {p:?}-{q:?} at {t}: {v}");
+        }
+        let r = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        assert!(
+            r(p).min(r(q)) < 1.0 + 0.5,
+            "{p:?} {q:?} far outside the ball"
+        );
+    }
+    // --triangles, and models that are not a plain lattice, give meshes.
+    let tri = d.join("tri.3mf");
+    let mv = d.join("moved.3mf");
+    for (src, dst, extra) in [(&model, &tri, "--triangles"), (&moved, &mv, "--quiet")] {
+        ok(&[
+            "mesh",
+            src.to_str().unwrap(),
+            "-o",
+            dst.to_str().unwrap(),
+            "--resolution",
+            "40",
+            extra,
+        ]);
+        let m = microfrep::threemf::read_file(dst).unwrap();
+        assert!(microfrep::threemf::lattices(&m).unwrap().is_empty());
+        let meshes = microfrep::threemf::meshes(&m).unwrap();
+        assert!(meshes[0].triangles.len() > 1000);
+    }
+}

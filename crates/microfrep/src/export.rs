@@ -141,6 +141,44 @@ pub fn beam_lattice_3mf(
     Ok((g.beams.len(), g.nodes.len()))
 }
 
+/// A HyperFun strut lattice model (an `mfStruts` or `mfStrutsDensity`
+/// call at the plain point with constant cell and radius, alone or
+/// intersected with a part): see [`strut_model_of`].
+pub use microfrep_structures_hf::StrutModel;
+
+/// The strut lattice `shape` is, when it is one (see
+/// [`microfrep_structures_hf::strut_model`]; the model must have been
+/// lowered in this process, as [`crate::load()`] does).
+pub fn strut_model_of(shape: &Shape) -> Option<StrutModel> {
+    microfrep_structures_hf::strut_model(shape.value())
+}
+
+/// A strut lattice model as a 3MF beam lattice ([`beam_lattice_3mf`]):
+/// the part it is intersected with (or the box `bounds`, when it has none)
+/// meshed at `resolution` clips it. Returns (beams, nodes).
+pub fn strut_model_3mf(
+    s: &StrutModel,
+    bounds: Bounds,
+    resolution: usize,
+    out: &Path,
+) -> Result<(usize, usize), ExportError> {
+    use microfrep_structures::struts::StrutLattice;
+    let part = match &s.part {
+        Some(e) => Shape::new(e.clone()),
+        None => {
+            let [x, y, z] = microfrep_core::Expr::xyz();
+            let (lo, hi) = (bounds.min, bounds.max);
+            let slab = |v: &microfrep_core::Expr, a: usize| (v - lo[a]).min(&(hi[a] - v));
+            Shape::new(slab(&x, 0).min(slab(&y, 1)).min(slab(&z, 2)))
+        }
+    };
+    let kind = StrutLattice::ALL
+        .iter()
+        .position(|k| *k == s.kind)
+        .map_or(1, |i| i as u8 + 1);
+    beam_lattice_3mf(&part, kind, s.cell, s.radius, bounds, resolution, out)
+}
+
 // Volumetric and implicit extensions ------------------------------------
 
 /// Voxels of the image stacks along the longest side unless asked
@@ -843,4 +881,64 @@ pub fn add_volumetric_to_file(
     let r = add_volumetric(&mut m, part, shape, b, opts, progress)?;
     write_file(path, &m, &WriteOptions::default())?;
     Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volume_grid_covers_the_box_with_cubic_voxels_centred() {
+        let g = VolumeGrid::new(Bounds::new([0.0; 3], [4.0, 2.0, 1.0]), 8).unwrap();
+        assert_eq!((g.dims, g.pitch, g.min), ([8, 4, 2], 0.5, [0.0; 3]));
+        // One side not a whole number of voxels: centred overhang.
+        let g = VolumeGrid::new(Bounds::new([0.0; 3], [3.0, 1.0, 3.0]), 4).unwrap();
+        assert_eq!(g.dims, [4, 2, 4]);
+        assert!((g.min[1] + 0.25).abs() < 1e-12 && (g.max()[1] - 1.25).abs() < 1e-12);
+        // Voxel centres land on UVW (i + 1/2) / n.
+        let uvw = g.to_unit().apply(g.centre(0, 1, 3));
+        for (a, want) in [0.5 / 4.0, 1.5 / 2.0, 3.5 / 4.0].iter().enumerate() {
+            assert!((uvw[a] - want).abs() < 1e-12, "{uvw:?}");
+        }
+        assert!(VolumeGrid::new(Bounds::new([0.0; 3], [1.0; 3]), 0).is_err());
+        assert!(VolumeGrid::new(Bounds::new([0.0; 3], [0.0; 3]), 8).is_err());
+    }
+
+    #[test]
+    fn requests_are_checked_before_any_work() {
+        let [x, y, z] = microfrep_core::Expr::xyz();
+        let ball = 1.0 - (x.square() + y.square() + z.square());
+        let b = Bounds::new([-1.0; 3], [1.0; 3]);
+        let plain = Shape::new(ball.clone());
+        let graded = Shape::new(ball).with_attribute("s1", x.clone());
+        let opts = |f: &dyn Fn(&mut VolumeOptions)| {
+            let mut o = VolumeOptions::default();
+            f(&mut o);
+            o
+        };
+        let msg = |o: VolumeOptions, s: &Shape| o.check(s, b).unwrap_err().to_string();
+        assert!(msg(opts(&|_| {}), &plain).contains("nothing to add"));
+        assert!(msg(opts(&|o| o.attributes = true), &plain).contains("no attribute channels"));
+        let three =
+            microfrep_graded::stack::Palette::parse("a=#000000,b=#ffffff,c=#ff0000").unwrap();
+        let p = opts(&|o| o.palette = Some(three.clone()));
+        assert!(msg(p, &graded).contains("3 materials need 2 attribute channels"));
+        // 64^3 voxels of two channels in 1 MB: refused, with what fits.
+        let big = opts(&|o| {
+            o.attributes = true;
+            o.implicit = true;
+            o.memory_limit = Some(1e6);
+        });
+        let e = big.check(&graded, b).unwrap_err();
+        assert!(
+            matches!(e, ExportError::VolumeMemory { ref fit, .. } if fit.contains("would fit")),
+            "{e}"
+        );
+        // The implicit graph alone samples nothing.
+        let g = opts(&|o| {
+            o.implicit = true;
+            o.memory_limit = Some(1.0);
+        });
+        assert!(g.check(&plain, b).is_ok());
+    }
 }
