@@ -58,11 +58,14 @@ pub struct FillArgs {
     #[arg(long, default_value_t = 0.025)]
     pixel: f64,
     #[command(flatten)]
+    volume: crate::mesh_cmd::VolumeArgs,
+    #[command(flatten)]
     run: RunArgs,
 }
 
 pub fn run(a: FillArgs) -> Result<()> {
     a.run.init()?;
+    let volume = a.volume.options(&a.output)?;
     let structure = Structure::parse(&a.structure, a.sheet).ok_or_else(|| {
         anyhow::anyhow!("unknown structure '{}': {}", a.structure, Structure::NAMES)
     })?;
@@ -133,6 +136,9 @@ pub fn run(a: FillArgs) -> Result<()> {
             if a.shell.is_some() {
                 bail!("a beam lattice with a skin: write --triangles (one solid mesh)")
             }
+            if volume.is_some() {
+                bail!("--implicit, --volumetric and --palette add to a mesh: write --triangles")
+            }
             let k = microfrep::structures::struts::StrutLattice::ALL[kind as usize - 1];
             let r = microfrep::structures::density::strut_radius(
                 k,
@@ -153,7 +159,11 @@ pub fn run(a: FillArgs) -> Result<()> {
             serde_json::json!({ "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": r })
         }
         Some("stl" | "obj" | "ply" | "3mf") => {
-            let b = frame(&f.model, &a.part, &a.run)?.corners();
+            let bounds = frame(&f.model, &a.part, &a.run)?;
+            if let Some(v) = &volume {
+                v.check(&f.model.shape, bounds)?;
+            }
+            let b = bounds.corners();
             let n = match (a.resolution, a.voxel) {
                 (Some(n), _) => n,
                 (None, Some(v)) => microfrep::mesh::Grid::resolution_for_voxel(b, v)?,
@@ -167,7 +177,13 @@ pub fn run(a: FillArgs) -> Result<()> {
                 &Default::default(),
                 &|_, _| {},
             )?;
-            serde_json::json!({ "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges, "volume": s.volume, "resolution": n })
+            let mut j = serde_json::json!({ "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges, "volume": s.volume, "resolution": n });
+            if let Some(v) = &volume {
+                let r =
+                    crate::mesh_cmd::apply_volume(v, &a.output, &f.model.shape, bounds, &a.run)?;
+                j["volumetric"] = crate::mesh_cmd::volume_json(&r);
+            }
+            j
         }
         _ => {
             let b = frame(&f.model, &a.part, &a.run)?;

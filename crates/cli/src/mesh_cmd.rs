@@ -1,8 +1,11 @@
-//! `microfrep mesh`: triangle mesh of a model to STL, OBJ, PLY or 3MF.
+//! `microfrep mesh`: triangle mesh of a model to STL, OBJ, PLY or 3MF
+//! (with `--implicit`, `--volumetric`, `--palette`: the 3MF volumetric and
+//! implicit extensions, see [`VolumeArgs`]).
 
 use crate::common::{check_terminates, frame, load_model, probe_terminates, ModelArgs, RunArgs};
-use anyhow::Result;
+use anyhow::{bail, Result};
 use clap::Args;
+use microfrep::export::{VolumeOptions, VolumeReport};
 use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
 use microfrep::mesh::report;
 use microfrep::mesh::{CellMethod, Grid, MeshOptions};
@@ -39,6 +42,13 @@ pub struct MeshArgs {
     /// or tets (marching tetrahedra: sharp creases cut less).
     #[arg(long, value_enum, default_value_t = Cells::Cubes)]
     cells: Cells,
+    /// Write a strut lattice model (mfStruts at the plain point, constant
+    /// cell and radius, alone or `&` a part) to .3mf as triangles instead
+    /// of a beam lattice.
+    #[arg(long)]
+    triangles: bool,
+    #[command(flatten)]
+    volume: VolumeArgs,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -69,8 +79,13 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let start = Instant::now();
     a.run.init()?;
     microfrep::mesh::write::format_of(&a.output)?;
+    let volume = a.volume.options(&a.output)?;
     let m = load_model(&a.model, &a.run)?;
-    let b = frame(&m, &a.model, &a.run)?.corners();
+    let bounds = frame(&m, &a.model, &a.run)?;
+    let b = bounds.corners();
+    if let Some(v) = &volume {
+        v.check(&m.shape, bounds)?;
+    }
     probe_terminates(&m, b)?;
     let (resolution, auto) = match (a.resolution, a.voxel) {
         (Some(Resolution::Cells(n)), _) => (n, None),
@@ -78,6 +93,32 @@ pub fn run(a: MeshArgs) -> Result<()> {
         (None, Some(v)) => (Grid::resolution_for_voxel(b, v)?, None),
         (None, None) => (256, None),
     };
+    let is_3mf = a
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("3mf"));
+    if is_3mf && !a.triangles && volume.is_none() {
+        if let Some(sm) = microfrep::export::strut_model_of(&m.shape) {
+            let n = if resolution == 0 { 256 } else { resolution };
+            let (beams, nodes) = microfrep::export::strut_model_3mf(&sm, bounds, n, &a.output)?;
+            check_terminates(&m, &[&a.output])?;
+            let out = a.output.display().to_string();
+            if a.run.json {
+                let j = serde_json::json!({ "output": out, "kind": "beam-lattice",
+                    "lattice": sm.kind.name(), "cell": sm.cell, "radius": sm.radius,
+                    "beams": beams, "nodes": nodes, "clipped": sm.part.is_some() });
+                println!("{j}");
+            } else if !a.run.quiet {
+                println!(
+                    "wrote {out} (beam lattice: {beams} {} beams on {nodes} nodes, radius {}, cell {}; --triangles writes the mesh)",
+                    sm.kind.name(),
+                    sm.radius,
+                    sm.cell
+                );
+            }
+            return Ok(());
+        }
+    }
     if !(a.max_volume_loss >= 0.0 && a.max_volume_loss <= 100.0) {
         anyhow::bail!(
             "--max-volume-loss {}: give a percentage from 0 to 100",
@@ -105,14 +146,150 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let s = mesh_to_file(&m.shape, &opts, &a.output, &job, &progress);
     bar.finish_and_clear();
     let s = s?;
+    let added = match &volume {
+        Some(v) => Some(apply_volume(v, &a.output, &m.shape, bounds, &a.run)?),
+        None => None,
+    };
     check_terminates(&m, &[&a.output])?;
     let secs = start.elapsed().as_secs_f64();
     let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
     let out = a.output.display().to_string();
     if a.run.json {
-        println!("{}", report::to_json(&s, &out, secs, peak));
+        let mut j = report::to_json(&s, &out, secs, peak);
+        if let Some(r) = &added {
+            j["volumetric"] = volume_json(r);
+        }
+        println!("{j}");
     } else if !a.run.quiet {
         print!("{}", report::to_text(&s, &out, secs, peak));
+        if let Some(r) = &added {
+            println!("{}", volume_text(r));
+        }
     }
     Ok(())
+}
+
+/// The 3MF volumetric and implicit extensions, for `mesh` and `fill`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct VolumeArgs {
+    /// 3MF: add the model's implicit function as a level set, the built
+    /// object (an implicit node graph; an image stack of the field where
+    /// the model holds meshes, scans or other data fields).
+    #[arg(long)]
+    pub implicit: bool,
+    /// 3MF: add the attribute channels s[] as volume data (image stacks).
+    #[arg(long)]
+    pub volumetric: bool,
+    /// 3MF: materials NAME=#RRGGBB,... mixed by the attributes (material k
+    /// takes s[k], the last the remainder), a composite of the volume data;
+    /// implies --volumetric.
+    #[arg(long)]
+    pub palette: Option<String>,
+    /// 3MF: voxels of the image stacks along the longest side (default 64).
+    #[arg(long, value_name = "N")]
+    pub volume_resolution: Option<usize>,
+}
+
+impl VolumeArgs {
+    /// The options, or `None` when none was given; refused for outputs
+    /// other than .3mf.
+    pub fn options(&self, out: &std::path::Path) -> Result<Option<VolumeOptions>> {
+        let asked = self.implicit || self.volumetric || self.palette.is_some();
+        if !asked && self.volume_resolution.is_none() {
+            return Ok(None);
+        }
+        let is_3mf = out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("3mf"));
+        if !is_3mf {
+            bail!(
+                "{}: --implicit, --volumetric, --palette and --volume-resolution are 3MF \
+                 extensions: write a .3mf file",
+                out.display()
+            );
+        }
+        if !asked {
+            bail!("--volume-resolution: give --implicit, --volumetric or --palette too");
+        }
+        let palette = match &self.palette {
+            Some(p) => Some(microfrep::graded::stack::Palette::parse(p)?),
+            None => None,
+        };
+        Ok(Some(VolumeOptions {
+            implicit: self.implicit,
+            attributes: self.volumetric,
+            palette,
+            resolution: self
+                .volume_resolution
+                .unwrap_or(microfrep::export::DEFAULT_VOLUME_RESOLUTION),
+            memory_limit: None,
+        }))
+    }
+}
+
+/// Adds the extensions to the 3MF just written (removed again on failure)
+/// and prints the fallback note.
+pub fn apply_volume(
+    v: &VolumeOptions,
+    out: &std::path::Path,
+    shape: &microfrep::Shape,
+    b: microfrep::Bounds,
+    run: &RunArgs,
+) -> Result<VolumeReport> {
+    let bar = run.bar("sheets");
+    bar.set_message("sampling volumes");
+    let r = microfrep::export::add_volumetric_to_file(out, shape, b, v, &|d, t| {
+        bar.set_length(t);
+        bar.set_position(d);
+    });
+    bar.finish_and_clear();
+    let r = r.inspect_err(|_| {
+        let _ = std::fs::remove_file(out);
+    })?;
+    if let Some(n) = r.note() {
+        run.note(&n);
+    }
+    Ok(r)
+}
+
+/// The summary of [`apply_volume`] as JSON.
+pub fn volume_json(r: &VolumeReport) -> serde_json::Value {
+    use microfrep::export::LevelSetSource;
+    let ls = match &r.level_set {
+        Some(LevelSetSource::Graph { nodes }) => {
+            serde_json::json!({ "kind": "implicit", "nodes": nodes })
+        }
+        Some(LevelSetSource::ImageStack { fields }) => {
+            serde_json::json!({ "kind": "image-stack", "fields": fields })
+        }
+        None => serde_json::Value::Null,
+    };
+    serde_json::json!({
+        "level_set": ls, "attributes": r.attributes, "materials": r.materials,
+        "images": r.images, "dims": r.grid.dims, "pitch": r.grid.pitch,
+    })
+}
+
+/// The summary of [`apply_volume`] as a line of text.
+pub fn volume_text(r: &VolumeReport) -> String {
+    use microfrep::export::LevelSetSource;
+    let mut parts = Vec::new();
+    match &r.level_set {
+        Some(LevelSetSource::Graph { nodes }) => {
+            parts.push(format!("level set: implicit graph of {nodes} nodes"))
+        }
+        Some(LevelSetSource::ImageStack { .. }) => parts.push("level set: image stack".into()),
+        None => {}
+    }
+    if r.attributes > 0 {
+        parts.push(format!("{} attribute(s) as volume data", r.attributes));
+    }
+    if r.materials > 0 {
+        parts.push(format!("a composite of {} materials", r.materials));
+    }
+    let [x, y, z] = r.grid.dims;
+    if r.images > 0 {
+        parts.push(format!("{} image stack(s) of {x} x {y} x {z}", r.images));
+    }
+    format!("  3MF extensions {}", parts.join("; "))
 }

@@ -34,6 +34,8 @@ mod struts;
 mod tables;
 mod tpms;
 
+pub use struts::{strut_model, StrutCall, StrutModel};
+
 use microfrep_hyperfun::library::{add_extension, Registry};
 
 /// Prefix of every function of this library.
