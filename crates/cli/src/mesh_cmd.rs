@@ -5,6 +5,7 @@ use anyhow::Result;
 use clap::Args;
 use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
 use microfrep::mesh::report;
+use microfrep::mesh::write::colour::ColourBy;
 use microfrep::mesh::{CellMethod, Grid, MeshOptions};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -39,6 +40,9 @@ pub struct MeshArgs {
     /// or tets (marching tetrahedra: sharp creases cut less).
     #[arg(long, value_enum, default_value_t = Cells::Cubes)]
     cells: Cells,
+    /// Vertex colours from an attribute (.ply, .obj, .3mf; not .stl).
+    #[command(flatten)]
+    colour: crate::render_cmd::ColourArgs,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -100,6 +104,11 @@ pub fn run(a: MeshArgs) -> Result<()> {
         stream: a.stream,
         max_volume_loss: Some(a.max_volume_loss / 100.0),
         auto,
+        colour: a.colour.get()?.map(|(channel, colormap, range)| ColourBy {
+            channel,
+            colormap,
+            range,
+        }),
         ..JobOptions::default()
     };
     let s = mesh_to_file(&m.shape, &opts, &a.output, &job, &progress);
@@ -109,10 +118,21 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let secs = start.elapsed().as_secs_f64();
     let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
     let out = a.output.display().to_string();
+    let range = s.colour_scale.map(|c| [c.lo, c.hi]);
     if a.run.json {
-        println!("{}", report::to_json(&s, &out, secs, peak));
+        let mut j = report::to_json(&s, &out, secs, peak);
+        if let Some(r) = range {
+            j["colour_range"] = serde_json::json!(r);
+        }
+        println!("{j}");
     } else if !a.run.quiet {
         print!("{}", report::to_text(&s, &out, secs, peak));
+        if let Some([lo, hi]) = range {
+            println!(
+                "  colours    attribute {} over {lo} .. {hi}",
+                a.colour.color_by.unwrap_or(0)
+            );
+        }
     }
     Ok(())
 }

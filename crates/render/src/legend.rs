@@ -125,7 +125,18 @@ pub fn draw(img: &mut RgbImage, x0: usize, width: usize, scale: &ColourScale) ->
         };
         fill(img, bar_x, bar_y + r, bar_w, 1, scale.map.rgb(t));
     }
-    for (text, y) in [(label(scale.hi), m), (label(scale.lo), bar_y + bar_h + m)] {
+    // Rounding noise next to zero (1e-13 for 0) prints as 0.
+    let tidy = |v: f64| {
+        if v.abs() < 1e-9 * (scale.hi - scale.lo) {
+            0.0
+        } else {
+            v
+        }
+    };
+    for (text, y) in [
+        (label(tidy(scale.hi)), m),
+        (label(tidy(scale.lo)), bar_y + bar_h + m),
+    ] {
         let tw = text_width(&text, s);
         let x = x0 + width.saturating_sub(tw) / 2;
         draw_text(img, x, y, s, &text);

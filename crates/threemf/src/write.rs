@@ -454,7 +454,7 @@ fn write_root<W: Write>(
         s.push_str("</m:compositematerials>\n");
     }
     for cg in &m.color_groups {
-        write!(s, "<m:colorgroup id=\"{}\">\n", cg.id).unwrap();
+        writeln!(s, "<m:colorgroup id=\"{}\">", cg.id).unwrap();
         for c in &cg.colors {
             writeln!(
                 s,
