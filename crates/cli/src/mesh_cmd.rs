@@ -8,6 +8,7 @@ use clap::Args;
 use microfrep::export::{VolumeOptions, VolumeReport};
 use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
 use microfrep::mesh::report;
+use microfrep::mesh::write::colour::ColourBy;
 use microfrep::mesh::{CellMethod, Grid, MeshOptions};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -44,11 +45,14 @@ pub struct MeshArgs {
     cells: Cells,
     /// Write a strut lattice model (mfStruts at the plain point, constant
     /// cell and radius, alone or `&` a part) to .3mf as triangles instead
-    /// of a beam lattice.
+    /// of a beam lattice (implied by --color-by and the volumetric options).
     #[arg(long)]
     triangles: bool,
     #[command(flatten)]
     volume: VolumeArgs,
+    /// Vertex colours from an attribute (.ply, .obj, .3mf; not .stl).
+    #[command(flatten)]
+    colour: crate::render_cmd::ColourArgs,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -97,7 +101,9 @@ pub fn run(a: MeshArgs) -> Result<()> {
         .output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("3mf"));
-    if is_3mf && !a.triangles && volume.is_none() {
+    // A beam lattice has no vertices to colour: with --color-by (or the
+    // volumetric extras) a strut model is written as triangles.
+    if is_3mf && !a.triangles && volume.is_none() && a.colour.color_by.is_none() {
         if let Some(sm) = microfrep::export::strut_model_of(&m.shape) {
             let n = if resolution == 0 { 256 } else { resolution };
             let (beams, nodes) = microfrep::export::strut_model_3mf(&sm, bounds, n, &a.output)?;
@@ -141,6 +147,11 @@ pub fn run(a: MeshArgs) -> Result<()> {
         stream: a.stream,
         max_volume_loss: Some(a.max_volume_loss / 100.0),
         auto,
+        colour: a.colour.get()?.map(|(channel, colormap, range)| ColourBy {
+            channel,
+            colormap,
+            range,
+        }),
         ..JobOptions::default()
     };
     let s = mesh_to_file(&m.shape, &opts, &a.output, &job, &progress);
@@ -154,16 +165,26 @@ pub fn run(a: MeshArgs) -> Result<()> {
     let secs = start.elapsed().as_secs_f64();
     let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
     let out = a.output.display().to_string();
+    let range = s.colour_scale.map(|c| [c.lo, c.hi]);
     if a.run.json {
         let mut j = report::to_json(&s, &out, secs, peak);
         if let Some(r) = &added {
             j["volumetric"] = volume_json(r);
+        }
+        if let Some(r) = range {
+            j["colour_range"] = serde_json::json!(r);
         }
         println!("{j}");
     } else if !a.run.quiet {
         print!("{}", report::to_text(&s, &out, secs, peak));
         if let Some(r) = &added {
             println!("{}", volume_text(r));
+        }
+        if let Some([lo, hi]) = range {
+            println!(
+                "  colours    attribute {} over {lo} .. {hi}",
+                a.colour.color_by.unwrap_or(0)
+            );
         }
     }
     Ok(())

@@ -3,7 +3,9 @@
 use crate::common::{check_extension, frame, load_model, ModelArgs, RunArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use microfrep::render::{cutaway, ray_cast, section, Camera, Plane, View};
+use microfrep::render::{
+    cutaway, ray_cast, ray_cast_attribute, section, AttributeShading, Camera, Colormap, Plane, View,
+};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -26,7 +28,64 @@ pub struct RenderArgs {
     #[arg(long)]
     cutaway: bool,
     #[command(flatten)]
+    colour: ColourArgs,
+    #[command(flatten)]
     run: RunArgs,
+}
+
+/// Colouring by an attribute channel (`mesh` and `render`).
+#[derive(Args)]
+pub struct ColourArgs {
+    /// Colour by attribute channel K (1-based, HyperFun's s[K]) through
+    /// --colormap over --range.
+    #[arg(long = "color-by", visible_alias = "colour-by", value_name = "K")]
+    pub color_by: Option<usize>,
+    /// Colour map of --color-by: viridis or grey.
+    #[arg(
+        long,
+        value_name = "MAP",
+        default_value = "viridis",
+        requires = "color_by"
+    )]
+    pub colormap: Colormap,
+    /// Values of the map's first and last colour, LO,HI (default: the
+    /// channel's smallest and largest value over the mesh's vertices or the
+    /// visible surface).
+    #[arg(
+        long,
+        value_name = "LO,HI",
+        value_parser = parse_range,
+        requires = "color_by",
+        allow_hyphen_values = true
+    )]
+    pub range: Option<(f64, f64)>,
+}
+
+/// A 0-based channel, its colour map and range.
+pub type ColourRequest = (usize, Colormap, Option<[f64; 2]>);
+
+impl ColourArgs {
+    /// The request; `None` without --color-by.
+    pub fn get(&self) -> Result<Option<ColourRequest>> {
+        match self.color_by {
+            None => Ok(None),
+            Some(0) => bail!("--color-by K: channels count from 1 (HyperFun's s[1])"),
+            Some(k) => Ok(Some((k - 1, self.colormap, self.range.map(|r| [r.0, r.1])))),
+        }
+    }
+}
+
+fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
+    let bad = || format!("'{s}': expected LO,HI with finite LO < HI");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (lo, hi): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(bad());
+    }
+    Ok((lo, hi))
 }
 
 fn size(s: &str) -> Result<(usize, usize)> {
@@ -50,8 +109,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?;
     let (min, max) = (b.min, b.max);
+    let colour = a.colour.get()?;
+    let mut range = None;
     let img = match a.section {
         Some(_) if a.cutaway => bail!("--section and --cutaway do not combine"),
+        Some(_) if colour.is_some() => {
+            bail!("--color-by shades the ray-cast surface; it does not combine with --section")
+        }
         Some(plane) => {
             let (lo, hi) = (min[plane.axis], max[plane.axis]);
             if !(lo..=hi).contains(&plane.value) {
@@ -70,15 +134,30 @@ pub fn run(a: RenderArgs) -> Result<()> {
             } else {
                 m.shape
             };
-            ray_cast(&s, &Camera::fit(a.view, min, max, w, h), min, max)
+            match colour {
+                Some((channel, colormap, given)) => {
+                    let opts = AttributeShading {
+                        channel,
+                        colormap,
+                        range: given,
+                        legend: true,
+                    };
+                    let out = ray_cast_attribute(&s, a.view, min, max, w, h, &opts)?;
+                    range = Some(([out.scale.lo, out.scale.hi], out.bar));
+                    out.image
+                }
+                None => ray_cast(&s, &Camera::fit(a.view, min, max, w, h), min, max),
+            }
         }
     };
     img.save_png(&a.output)?;
     if a.run.json {
-        println!(
-            "{}",
-            serde_json::json!({ "output": a.output.display().to_string(), "size": [w, h] })
-        );
+        let mut j = serde_json::json!({ "output": a.output.display().to_string(), "size": [w, h] });
+        if let Some((r, bar)) = range {
+            j["colour_range"] = serde_json::json!(r);
+            j["legend_bar"] = serde_json::json!(bar);
+        }
+        println!("{j}");
     }
     Ok(())
 }

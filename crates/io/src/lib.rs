@@ -12,6 +12,8 @@
 //! - [`limits`]: the memory a job may use (the smallest of available RAM,
 //!   the cgroup limit and `RLIMIT_AS`), the peak resident size, and the free
 //!   space on the disk an output goes to.
+//! - [`colormap`]: scalar values to colour (viridis, grey), shared by the
+//!   coloured mesh writers and attribute renderings.
 //! - [`precision`]: the boxes and cells f32 sampling can resolve, and a
 //!   probe comparing a model's f32 and f64 values.
 //!
@@ -32,6 +34,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+pub mod colormap;
 pub mod format;
 pub mod limits;
 pub mod png;

@@ -14,12 +14,17 @@
 //! than a cell vanish from a mesh without a hole, and this is how they are
 //! noticed. [`JobOptions::auto`] chooses the resolution instead: the
 //! coarsest at which the mesh keeps the model's volume.
+//! [`JobOptions::colour`] colours the vertices by an attribute channel
+//! (PLY, OBJ, 3MF; checked before meshing).
 
 use crate::check::summary;
 use crate::memory::{self, Estimate, GIB};
 use crate::sampled::{sampled_volume, SampledVolume};
 use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
-use crate::write::{format_of, stream_mesh_checked, write_mesh, MeshFormat};
+use crate::write::colour::{channel_tape, scale_of, vertex_colours, ColourBy, ColourScale};
+use crate::write::{
+    check_colours, format_of, stream_mesh_coloured, write_mesh_coloured, MeshFormat,
+};
 use crate::{Grid, Mesh, MeshError, MeshOptions, Plan};
 use microfrep_core::{ErrorCensus, Shape};
 use std::path::Path;
@@ -39,6 +44,9 @@ pub struct JobOptions {
     pub max_volume_loss: Option<f64>,
     /// Choose the resolution ([`MeshOptions::resolution`] is then ignored).
     pub auto: Option<AutoOptions>,
+    /// Colour the vertices by an attribute channel (formats that store
+    /// colours only: PLY, OBJ, 3MF; streamed PLY too).
+    pub colour: Option<ColourBy>,
 }
 
 impl Default for JobOptions {
@@ -48,6 +56,7 @@ impl Default for JobOptions {
             memory_limit: None,
             max_volume_loss: Some(0.05),
             auto: None,
+            colour: None,
         }
     }
 }
@@ -131,6 +140,10 @@ pub struct Summary {
     /// The resolutions tried by `auto`, in order (the last is the one
     /// written); empty without `auto`.
     pub trials: Vec<Trial>,
+    /// The colour scale of the vertex colours (with
+    /// [`JobOptions::colour`]): its range is the one asked for or the
+    /// attribute's over the vertices.
+    pub colour_scale: Option<ColourScale>,
 }
 
 /// Meshes `shape` with `opts` into `out` (format by extension);
@@ -144,6 +157,13 @@ pub fn mesh_to_file(
 ) -> Result<Summary, MeshError> {
     let format = format_of(out)?;
     microfrep_io::atomic::check_not_input(out)?;
+    if let Some(by) = &job.colour {
+        // Refused before any meshing: no colours in the format, no such
+        // channel, a bad range.
+        check_colours(format, out)?;
+        channel_tape(shape, by.channel)?;
+        scale_of(by, &[])?;
+    }
     let avail = job.memory_limit.or_else(microfrep_io::limits::memory_limit);
     let mut opts = opts.clone();
     opts.memory_limit = avail;
@@ -178,8 +198,12 @@ pub fn mesh_to_file(
     let progress = |done: usize| progress(done, total);
     // Runs after meshing, before the output is committed.
     let verdict = |t: &Tally| verdict(shape, &plan, &opts, job, sampled.as_ref(), t);
+    let colour_scale;
     let mut s = if stream {
-        let t = stream_mesh_checked(&plan, out, format.wants_normals(), &progress, &verdict)?;
+        let colour = job.colour.as_ref().map(|c| (shape, c));
+        let normals = format.wants_normals();
+        let (t, scale) = stream_mesh_coloured(&plan, out, normals, colour, &progress, &verdict)?;
+        colour_scale = scale;
         summary_of(&opts, &plan, &t, None, predicted, true)
     } else {
         let mesh = match kept {
@@ -195,7 +219,18 @@ pub fn mesh_to_file(
             bbox: r.bbox,
         };
         verdict(&t)?;
-        write(format, out, &plan, &mesh)?;
+        let colours = match &job.colour {
+            Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
+            None => None,
+        };
+        colour_scale = colours.as_ref().map(|c| c.scale);
+        write(
+            format,
+            out,
+            &plan,
+            &mesh,
+            colours.as_ref().map(|c| &c.rgb[..]),
+        )?;
         summary_of(
             &opts,
             &plan,
@@ -210,12 +245,19 @@ pub fn mesh_to_file(
     s.sampled_volume = sampled;
     s.volume_loss = sampled.and_then(|v| loss(v.value, s.volume));
     s.trials = trials;
+    s.colour_scale = colour_scale;
     Ok(s)
 }
 
-fn write(format: &dyn MeshFormat, out: &Path, plan: &Plan, mesh: &Mesh) -> Result<(), MeshError> {
+fn write(
+    format: &dyn MeshFormat,
+    out: &Path,
+    plan: &Plan,
+    mesh: &Mesh,
+    colours: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
     let normals = format.wants_normals().then(|| plan.normals(mesh));
-    write_mesh(out, mesh, normals.as_deref())
+    write_mesh_coloured(out, mesh, normals.as_deref(), colours)
 }
 
 fn summary_of(
@@ -244,6 +286,7 @@ fn summary_of(
         sampled_volume: None,
         volume_loss: None,
         trials: Vec::new(),
+        colour_scale: None,
     }
 }
 

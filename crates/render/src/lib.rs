@@ -2,6 +2,8 @@
 //! interval-arithmetic root finding, cut-away views and section images.
 //!
 //! [`ray_cast`] shades what a [`Camera`] sees of a model inside a box;
+//! [`ray_cast_attribute`] colours the same surface by an attribute channel
+//! through a [`Colormap`], with a [`legend`];
 //! [`cutaway`] opens the octant nearest the viewer first, and [`section()`]
 //! maps the model's value on a plane to colour. Images are [`RgbImage`]s,
 //! written with [`RgbImage::save_png`]. The same model, box and size give
@@ -35,6 +37,7 @@
 pub mod camera;
 mod error;
 pub mod image;
+pub mod legend;
 pub mod section;
 pub mod shade;
 pub mod trace;
@@ -42,8 +45,9 @@ pub mod trace;
 pub use camera::{Camera, View};
 pub use error::{RenderError, Result};
 pub use image::RgbImage;
+pub use microfrep_io::colormap::{Colormap, ColourScale};
 pub use section::{section, Plane};
-pub use shade::ray_cast;
+pub use shade::{ray_cast, ray_cast_attribute, AttributeImage, AttributeShading};
 
 use microfrep_core::{Expr, Shape};
 

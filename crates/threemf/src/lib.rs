@@ -49,8 +49,9 @@ pub use error::{Error, Result};
 pub use flatten::{lattices, meshes, read_beam_lattices, read_meshes, NamedLattice, NamedMesh};
 pub use implicit::{ImplicitFunction, ImplicitGraph, ImplicitNode};
 pub use model::{
-    Base, BaseMaterials, BuildItem, Component, CompositeMaterials, Mesh, MeshResolution, Metadata,
-    Model, Object, ObjectContent, ObjectType, Transform, TriangleProperties, Unit,
+    Base, BaseMaterials, BuildItem, ColorGroup, Component, CompositeMaterials, Mesh,
+    MeshResolution, Metadata, Model, Object, ObjectContent, ObjectType, Transform,
+    TriangleProperties, Unit,
 };
 pub use read::{read_file, read_from};
 pub use slice::{Polygon, Slice, SliceStack};

@@ -229,7 +229,8 @@ impl ObjectType {
 /// index into it at each corner.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TriangleProperties {
-    /// Resource id of the property group (base or composite materials).
+    /// Resource id of the property group (base or composite materials, or
+    /// a colour group).
     pub pid: u32,
     /// Property index at the three corners of each triangle.
     pub indices: Vec<[u32; 3]>,
@@ -349,6 +350,17 @@ pub struct CompositeMaterials {
     pub composites: Vec<Vec<f64>>,
 }
 
+/// A `<m:colorgroup>` resource (materials extension): sRGB colours with
+/// alpha, assignable to triangle corners (the mesh writer stores one per
+/// vertex).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ColorGroup {
+    /// Resource id.
+    pub id: u32,
+    /// The colours, indexed from 0.
+    pub colors: Vec<[u8; 4]>,
+}
+
 /// A build item.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BuildItem {
@@ -374,6 +386,8 @@ pub struct Model {
     pub base_materials: Vec<BaseMaterials>,
     /// Composite materials.
     pub composite_materials: Vec<CompositeMaterials>,
+    /// Colour groups.
+    pub color_groups: Vec<ColorGroup>,
     /// 3D images (volumetric).
     pub images: Vec<Image3D>,
     /// Functions sampling 3D images.
@@ -410,6 +424,7 @@ impl Model {
             .iter()
             .map(|r| r.id)
             .chain(self.composite_materials.iter().map(|r| r.id))
+            .chain(self.color_groups.iter().map(|r| r.id))
             .chain(self.images.iter().map(|r| r.id))
             .chain(self.image_functions.iter().map(|r| r.id))
             .chain(self.implicit_functions.iter().map(|r| r.id))

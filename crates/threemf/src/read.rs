@@ -375,6 +375,7 @@ enum Ctx {
     Build,
     BaseMaterials,
     CompositeMaterials,
+    ColorGroup,
     Object,
     Mesh,
     Vertices,
@@ -551,6 +552,31 @@ fn parse_num(part: &str, off: u64, what: &str, v: &str) -> Result<f64> {
 }
 
 /// An xs:double (may be INF, -INF, NaN).
+/// An sRGB colour `#RRGGBB` or `#RRGGBBAA` (alpha 255 when absent).
+fn parse_colour(part: &str, off: u64, v: &str) -> Result<[u8; 4]> {
+    let hex = v.trim().strip_prefix('#').unwrap_or("");
+    let byte = |i: usize| {
+        hex.get(i..i + 2)
+            .and_then(|h| u8::from_str_radix(h, 16).ok())
+    };
+    match (hex.len(), byte(0), byte(2), byte(4)) {
+        (6, Some(r), Some(g), Some(b)) => Ok([r, g, b, 255]),
+        (8, Some(r), Some(g), Some(b)) => match byte(6) {
+            Some(a) => Ok([r, g, b, a]),
+            None => Err(invalid(
+                part,
+                off,
+                format!("colour \"{v}\" is not #RRGGBB or #RRGGBBAA"),
+            )),
+        },
+        _ => Err(invalid(
+            part,
+            off,
+            format!("colour \"{v}\" is not #RRGGBB or #RRGGBBAA"),
+        )),
+    }
+}
+
 fn parse_double(part: &str, off: u64, what: &str, v: &str) -> Result<f64> {
     match v.trim() {
         "INF" => Ok(f64::INFINITY),
@@ -810,6 +836,29 @@ impl Parser<'_> {
                 });
                 return Ok(Skip);
             }
+            (ColorGroup, Ns::Material, "color") => {
+                let mut c = None;
+                for a in e.attributes().flatten() {
+                    if a.key.as_ref() == b"color" {
+                        let v = std::str::from_utf8(&a.value).unwrap_or("?");
+                        c = Some(parse_colour(self.part, self.off, v)?);
+                    }
+                }
+                let g = self.model.color_groups.last_mut().expect("inside a group");
+                let c = c.ok_or_else(|| {
+                    invalid(
+                        self.part,
+                        self.off,
+                        format!(
+                            "colour {} of colorgroup {} lacks color",
+                            g.colors.len(),
+                            g.id
+                        ),
+                    )
+                })?;
+                g.colors.push(c);
+                return Ok(Skip);
+            }
             (SliceVertices, Ns::Slice, "vertex") => {
                 let mut p = [f64::NAN; 2];
                 for a in e.attributes().flatten() {
@@ -959,6 +1008,14 @@ impl Parser<'_> {
                     .composites
                     .push(v);
                 Skip
+            }
+            (Resources, Ns::Material, "colorgroup") => {
+                let id = parse_id(part, off, "id", need("id")?)?;
+                self.model.color_groups.push(crate::model::ColorGroup {
+                    id,
+                    colors: Vec::new(),
+                });
+                ColorGroup
             }
             (Resources, Ns::Core, "object") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
@@ -1445,6 +1502,12 @@ impl Parser<'_> {
                     });
                 }
                 self.object.as_mut().unwrap().content = ObjectContent::Mesh(mesh);
+            }
+            ColorGroup => {
+                let g = self.model.color_groups.last().expect("just read");
+                if g.colors.is_empty() {
+                    return Err(self.err(format!("colorgroup {} has no colour", g.id)));
+                }
             }
             Components => {
                 if self.components.is_empty() {

@@ -368,7 +368,8 @@ impl Extensions {
                 }
             }
         };
-        add("m", ns::MATERIAL, !m.composite_materials.is_empty(), false);
+        let materials = !m.composite_materials.is_empty() || !m.color_groups.is_empty();
+        add("m", ns::MATERIAL, materials, false);
         add("b", ns::BEAM, !lattices.is_empty(), true);
         add("b2", ns::BALLS, balls, true);
         add("s", ns::SLICE, !m.slice_stacks.is_empty() || lowres, lowres);
@@ -451,6 +452,22 @@ fn write_root<W: Write>(
             write!(s, "<m:composite values=\"{}\"/>", v.join(" ")).unwrap();
         }
         s.push_str("</m:compositematerials>\n");
+    }
+    for cg in &m.color_groups {
+        writeln!(s, "<m:colorgroup id=\"{}\">", cg.id).unwrap();
+        for c in &cg.colors {
+            writeln!(
+                s,
+                "<m:color color=\"#{:02X}{:02X}{:02X}{:02X}\"/>",
+                c[0], c[1], c[2], c[3]
+            )
+            .unwrap();
+            if s.len() > 1 << 20 {
+                w.write_all(s.as_bytes())?;
+                s.clear();
+            }
+        }
+        s.push_str("</m:colorgroup>\n");
     }
     for im in &m.images {
         write!(s, "<v:image3d id=\"{}\"", im.id).unwrap();
@@ -920,6 +937,16 @@ pub fn validate(m: &Model) -> Result<()> {
             return Err(bad(format!("basematerials {} has no base", b.id)));
         }
     }
+    let colours: HashMap<u32, usize> = m
+        .color_groups
+        .iter()
+        .map(|g| (g.id, g.colors.len()))
+        .collect();
+    for g in &m.color_groups {
+        if g.colors.is_empty() {
+            return Err(bad(format!("colorgroup {} has no colour", g.id)));
+        }
+    }
     for c in &m.composite_materials {
         let n = *bases.get(&c.base_materials).ok_or_else(|| {
             bad(format!(
@@ -1082,7 +1109,7 @@ pub fn validate(m: &Model) -> Result<()> {
             }
         }
         if let Some((pid, pindex)) = o.property {
-            match bases.get(&pid) {
+            match bases.get(&pid).or_else(|| colours.get(&pid)) {
                 Some(&n) if (pindex as usize) < n => {}
                 _ if m.composite_materials.iter().any(|c| c.id == pid) => {}
                 _ => {
@@ -1164,6 +1191,7 @@ pub fn validate(m: &Model) -> Result<()> {
                     }
                     let n = bases
                         .get(&p.pid)
+                        .or_else(|| colours.get(&p.pid))
                         .copied()
                         .or_else(|| {
                             m.composite_materials

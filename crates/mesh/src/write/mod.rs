@@ -3,7 +3,9 @@
 //! [`microfrep_io::AtomicFile`] (a unique temporary next to the target,
 //! renamed on success, removed on error or interruption), and the bytes of
 //! large meshes are encoded in parallel chunks and written in large blocks.
+//! PLY, OBJ and 3MF also store per-vertex colours ([`colour`]).
 
+pub mod colour;
 mod obj;
 mod ply;
 mod stl;
@@ -11,7 +13,7 @@ mod stream;
 mod threemf;
 
 pub use stl::StlWriter;
-pub use stream::{stream_mesh, stream_mesh_checked};
+pub use stream::{stream_mesh, stream_mesh_checked, stream_mesh_coloured};
 
 use crate::{Mesh, MeshError};
 use microfrep_io::{AtomicFile, FormatRegistry, OutputFormat};
@@ -31,11 +33,18 @@ pub trait MeshFormat: OutputFormat {
     fn streams(&self) -> bool {
         false
     }
-    /// Writes the whole mesh to `out`.
+    /// Whether the format stores per-vertex colours (passed to
+    /// [`MeshFormat::write`]).
+    fn stores_colours(&self) -> bool {
+        false
+    }
+    /// Writes the whole mesh to `out`, with `colours` (one per vertex)
+    /// where the format stores them.
     fn write(
         &self,
         mesh: &Mesh,
         normals: Option<&[[f32; 3]]>,
+        colours: Option<&[[u8; 3]]>,
         out: &mut AtomicFile,
     ) -> std::io::Result<()>;
 }
@@ -62,13 +71,48 @@ pub fn format_of(path: &Path) -> Result<&'static dyn MeshFormat, MeshError> {
 /// (one per vertex) are used by the formats that store them. On error
 /// nothing is left behind.
 pub fn write_mesh(out: &Path, mesh: &Mesh, normals: Option<&[[f32; 3]]>) -> Result<(), MeshError> {
+    write_mesh_coloured(out, mesh, normals, None)
+}
+
+/// [`write_mesh`] with per-vertex sRGB `colours` (one per vertex); an
+/// error, before anything is written, for a format that cannot store them
+/// (STL) or a count that does not match the vertices.
+pub fn write_mesh_coloured(
+    out: &Path,
+    mesh: &Mesh,
+    normals: Option<&[[f32; 3]]>,
+    colours: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
     let format = format_of(out)?;
+    if colours.is_some() {
+        check_colours(format, out)?;
+    }
+    if let Some(c) = colours.filter(|c| c.len() != mesh.vertices.len()) {
+        return Err(MeshError::Input(format!(
+            "{}: {} colours for {} vertices",
+            out.display(),
+            c.len(),
+            mesh.vertices.len()
+        )));
+    }
     let mut f = AtomicFile::create(out)?;
     format
-        .write(mesh, normals, &mut f)
+        .write(mesh, normals, colours, &mut f)
         .map_err(|e| MeshError::from(f.err(e)))?;
     f.commit()?;
     Ok(())
+}
+
+/// An error unless `format` (of `out`) stores per-vertex colours.
+pub fn check_colours(format: &dyn MeshFormat, out: &Path) -> Result<(), MeshError> {
+    if format.stores_colours() {
+        return Ok(());
+    }
+    Err(MeshError::Input(format!(
+        "{}: {} has no per-vertex colours; write .ply, .obj or .3mf to colour by an attribute",
+        out.display(),
+        format.name()
+    )))
 }
 
 /// Items per parallel encoding chunk.

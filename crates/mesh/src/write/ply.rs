@@ -1,4 +1,5 @@
-//! Binary little-endian PLY with optional vertex normals.
+//! Binary little-endian PLY with optional vertex normals and vertex
+//! colours (`uchar red, green, blue`, after the normals).
 
 use super::{write_encoded, MeshFormat};
 use crate::Mesh;
@@ -23,18 +24,26 @@ impl MeshFormat for Ply {
     fn streams(&self) -> bool {
         true
     }
+    fn stores_colours(&self) -> bool {
+        true
+    }
     fn write(
         &self,
         mesh: &Mesh,
         normals: Option<&[[f32; 3]]>,
+        colours: Option<&[[u8; 3]]>,
         out: &mut AtomicFile,
     ) -> std::io::Result<()> {
         let (nv, nf) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
-        out.write_all(header(nv, nf, normals.is_some()).as_bytes())?;
+        let head = header(nv, nf, normals.is_some(), colours.is_some());
+        out.write_all(head.as_bytes())?;
         let idx: Vec<usize> = (0..mesh.vertices.len()).collect();
         write_encoded(out, &idx, |is, b| {
             for &i in is {
                 vertex(b, mesh.vertices[i], normals.map(|ns| ns[i]));
+                if let Some(cs) = colours {
+                    b.extend_from_slice(&cs[i]);
+                }
             }
         })?;
         write_encoded(out, &mesh.triangles, |ts, b| {
@@ -45,14 +54,18 @@ impl MeshFormat for Ply {
     }
 }
 
-/// The header for `nv` vertices and `nf` triangles.
-pub fn header(nv: u64, nf: u64, normals: bool) -> String {
+/// The header for `nv` vertices (with normals, colours when asked) and
+/// `nf` triangles.
+pub fn header(nv: u64, nf: u64, normals: bool, colours: bool) -> String {
     let mut s = format!(
         "ply\nformat binary_little_endian 1.0\ncomment microfrep mesh\n\
          element vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n"
     );
     if normals {
         s.push_str("property float nx\nproperty float ny\nproperty float nz\n");
+    }
+    if colours {
+        s.push_str("property uchar red\nproperty uchar green\nproperty uchar blue\n");
     }
     s.push_str(&format!(
         "element face {nf}\nproperty list uchar uint vertex_indices\nend_header\n"

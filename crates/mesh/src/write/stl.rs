@@ -26,6 +26,7 @@ impl MeshFormat for Stl {
         &self,
         mesh: &Mesh,
         _: Option<&[[f32; 3]]>,
+        _: Option<&[[u8; 3]]>,
         out: &mut AtomicFile,
     ) -> std::io::Result<()> {
         let n = count(mesh.triangles.len() as u64)?;

@@ -3,14 +3,19 @@
 //! (vertices and faces to two scratch files, joined behind the header once
 //! the counts are known). Same bytes as [`super::write_mesh`] of the same
 //! mesh; everything goes through one [`AtomicFile`], whose scratch files
-//! are removed with it.
+//! are removed with it. PLY vertex colours stream too: the attribute's
+//! value goes to the scratch file with each vertex and becomes a colour
+//! when the parts are joined, once the value range is known.
 
+use super::colour::{channel_tape, eval_at, scale_of, ColourBy};
 use super::{format_of, ply, StlWriter};
 use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
 use crate::{MeshError, Plan};
+use microfrep_core::Tape;
+use microfrep_io::colormap::ColourScale;
 use microfrep_io::AtomicFile;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::Path;
 
 struct StlSink<'a> {
@@ -35,15 +40,28 @@ struct PlySink<'a> {
     faces: BufWriter<File>,
     /// Set when vertex normals are wanted.
     normals: Option<&'a Plan>,
+    /// The attribute channel colouring the vertices, if any; its value is
+    /// written after each vertex record.
+    channel: Option<Tape>,
+    /// Smallest and largest finite attribute value so far.
+    seen: [f64; 2],
     buf: Vec<u8>,
 }
 
 impl MeshSink for PlySink<'_> {
     fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
         let ns = self.normals.map(|p| p.normals_at(v));
+        let values = self.channel.as_ref().map(|t| eval_at(t, v));
         self.buf.clear();
         for (i, p) in v.iter().enumerate() {
             ply::vertex(&mut self.buf, *p, ns.as_ref().map(|n| n[i]));
+            if let Some(s) = &values {
+                let x = s[i];
+                if x.is_finite() {
+                    self.seen = [self.seen[0].min(x as f64), self.seen[1].max(x as f64)];
+                }
+                self.buf.extend_from_slice(&x.to_le_bytes());
+            }
         }
         self.verts.write_all(&self.buf).map_err(io_err)
     }
@@ -84,6 +102,20 @@ pub fn stream_mesh_checked(
     progress: &(dyn Fn(usize) + Sync),
     verdict: &dyn Fn(&Tally) -> Result<(), MeshError>,
 ) -> Result<Tally, MeshError> {
+    stream_mesh_coloured(plan, out, normals, None, progress, verdict).map(|r| r.0)
+}
+
+/// [`stream_mesh_checked`], with the vertices coloured by the attribute
+/// `colour` names (a channel of `colour.0`; PLY only, an error before
+/// anything is meshed for STL); returns the colour scale used too.
+pub fn stream_mesh_coloured(
+    plan: &Plan,
+    out: &Path,
+    normals: bool,
+    colour: Option<(&microfrep_core::Shape, &ColourBy)>,
+    progress: &(dyn Fn(usize) + Sync),
+    verdict: &dyn Fn(&Tally) -> Result<(), MeshError>,
+) -> Result<(Tally, Option<ColourScale>), MeshError> {
     let format = format_of(out)?;
     if !format.streams() {
         return Err(MeshError::Input(format!(
@@ -91,6 +123,15 @@ pub fn stream_mesh_checked(
             out.display()
         )));
     }
+    let channel = match colour {
+        Some((shape, by)) => {
+            super::check_colours(format, out)?;
+            // A bad range is refused before meshing.
+            scale_of(by, &[])?;
+            Some((channel_tape(shape, by.channel)?, by))
+        }
+        None => None,
+    };
     let mut f = AtomicFile::create(out)?;
     let at = |e: MeshError| match e {
         MeshError::Stream(io) => MeshError::Io {
@@ -99,16 +140,16 @@ pub fn stream_mesh_checked(
         },
         e => e,
     };
-    let tally = if format.extensions().contains(&"stl") {
-        stream_stl(plan, &mut f, progress).map_err(at)?
+    let (tally, scale) = if format.extensions().contains(&"stl") {
+        (stream_stl(plan, &mut f, progress).map_err(at)?, None)
     } else {
-        stream_ply(plan, &mut f, normals, progress, verdict).map_err(at)?
+        stream_ply(plan, &mut f, normals, channel, progress, verdict).map_err(at)?
     };
     if format.extensions().contains(&"stl") {
         verdict(&tally)?;
     }
     f.commit()?;
-    Ok(tally)
+    Ok((tally, scale))
 }
 
 fn stream_stl(
@@ -132,9 +173,11 @@ fn stream_ply(
     plan: &Plan,
     f: &mut AtomicFile,
     normals: bool,
+    channel: Option<(Tape, &ColourBy)>,
     progress: &(dyn Fn(usize) + Sync),
     verdict: &dyn Fn(&Tally) -> Result<(), MeshError>,
-) -> Result<Tally, MeshError> {
+) -> Result<(Tally, Option<ColourScale>), MeshError> {
+    let by = channel.as_ref().map(|c| c.1);
     let (vp, fp) = (f.scratch_path(), f.scratch_path());
     let create = |p: &Path| -> Result<BufWriter<File>, MeshError> {
         Ok(BufWriter::with_capacity(
@@ -146,6 +189,8 @@ fn stream_ply(
         verts: create(&vp)?,
         faces: create(&fp)?,
         normals: normals.then_some(plan),
+        channel: channel.map(|c| c.0),
+        seen: [f64::INFINITY, f64::NEG_INFINITY],
         buf: Vec::new(),
     };
     let mut t = Tallying {
@@ -156,16 +201,68 @@ fn stream_ply(
     let tally = t.tally;
     sink.verts.flush().map_err(io_err)?;
     sink.faces.flush().map_err(io_err)?;
+    let seen = sink.seen;
     drop(sink);
     // Before the parts are joined: a refused mesh costs no more copying.
     verdict(&tally)?;
-    let head = ply::header(tally.vertices, tally.triangles, normals);
+    // The range asked for, or the values' own (as over all vertices).
+    let scale = match by {
+        Some(by) if by.range.is_some() => Some(scale_of(by, &[])?),
+        Some(by) => Some(ColourScale::over(by.colormap, seen)),
+        None => None,
+    };
+    let head = ply::header(tally.vertices, tally.triangles, normals, scale.is_some());
     f.write_all(head.as_bytes()).map_err(io_err)?;
-    for p in [&vp, &fp] {
+    for (k, p) in [&vp, &fp].into_iter().enumerate() {
         let mut r = File::open(p).map_err(io_err)?;
-        std::io::copy(&mut r, f).map_err(io_err)?;
+        match (k, &scale) {
+            (0, Some(s)) => colour_records(&mut r, f, if normals { 24 } else { 12 }, s)?,
+            _ => {
+                std::io::copy(&mut r, f).map_err(io_err)?;
+            }
+        }
         // The scratch file is no longer needed; free its space early.
         let _ = std::fs::remove_file(p);
     }
-    Ok(tally)
+    Ok((tally, scale))
+}
+
+/// Copies vertex records of `head` bytes, each followed by an f32
+/// attribute value, from `r` to `w`, the value replaced by its colour.
+fn colour_records(
+    r: &mut File,
+    w: &mut AtomicFile,
+    head: usize,
+    scale: &ColourScale,
+) -> Result<(), MeshError> {
+    const RECORDS: usize = 1 << 16;
+    let rec = head + 4;
+    let mut r = BufReader::with_capacity(4 << 20, r);
+    let mut inp = vec![0u8; rec * RECORDS];
+    let mut outp = Vec::with_capacity((head + 3) * RECORDS);
+    loop {
+        // Fill whole records (the last read may be short).
+        let mut n = 0;
+        while n < inp.len() {
+            match r.read(&mut inp[n..]).map_err(io_err)? {
+                0 => break,
+                k => n += k,
+            }
+        }
+        if n % rec != 0 {
+            return Err(MeshError::Internal(format!(
+                "vertex scratch file ends inside a record ({n} bytes in the last block)"
+            )));
+        }
+        outp.clear();
+        for c in inp[..n].chunks_exact(rec) {
+            outp.extend_from_slice(&c[..head]);
+            let v = f32::from_le_bytes(c[head..].try_into().expect("4 bytes"));
+            outp.extend_from_slice(&scale.colour(v as f64));
+        }
+        w.write_all(&outp).map_err(io_err)?;
+        if n < inp.len() {
+            return Ok(());
+        }
+    }
 }
