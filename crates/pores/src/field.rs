@@ -759,8 +759,9 @@ impl PoreField {
             }
         }
         let mut leaves = [0u32; GROUPS];
-        let mut counts = [0u16; GROUPS + 1];
         let mut ng = 0usize;
+        // Whether every point is in the first group.
+        let mut single = true;
         let mut leaf = usize::MAX;
         let mut g = u8::MAX;
         let (mut llo, mut lhi) = ([0.0; 3], [0.0; 3]);
@@ -769,6 +770,7 @@ impl PoreField {
             let p = [x[i] as f64, y[i] as f64, z[i] as f64];
             if p[0].is_nan() || p[1].is_nan() || p[2].is_nan() {
                 out[i] = f32::NAN;
+                single = false;
                 continue;
             }
             let q: [f64; 3] = std::array::from_fn(|a| p[a].clamp(lo[a], hi[a]));
@@ -788,15 +790,16 @@ impl PoreField {
             }
             if g == u8::MAX {
                 out[i] = self.value3(p, leaf) as f32;
+                single = false;
             } else {
                 sc.group[i] = g;
-                counts[g as usize + 1] += 1;
+                single &= g == 0;
             }
         }
         if ng == 0 {
             return;
         }
-        if ng == 1 && counts[1] as usize == m {
+        if ng == 1 && single {
             // All in one leaf (the common case): no sorting.
             sc.g[0][..m].copy_from_slice(x);
             sc.g[1][..m].copy_from_slice(y);
@@ -805,28 +808,20 @@ impl PoreField {
             out.copy_from_slice(&sc.g[3][..m]);
             return;
         }
-        // Counting sort of the point indices by group.
+        // Per group, its points (few groups: a pass each).
         for k in 0..ng {
-            counts[k + 1] += counts[k];
-        }
-        let mut fill = counts;
-        for i in 0..m {
-            let g = sc.group[i];
-            if g != u8::MAX {
-                sc.order[fill[g as usize] as usize] = i as u16;
-                fill[g as usize] += 1;
+            let mut n = 0;
+            for i in 0..m {
+                sc.order[n] = i as u16;
+                n += (sc.group[i] as usize == k) as usize;
             }
-        }
-        for k in 0..ng {
-            let (s, e) = (counts[k] as usize, counts[k + 1] as usize);
-            let n = e - s;
             for j in 0..n {
-                let i = sc.order[s + j] as usize;
+                let i = sc.order[j] as usize;
                 (sc.g[0][j], sc.g[1][j], sc.g[2][j]) = (x[i], y[i], z[i]);
             }
             self.group3(leaves[k] as usize, n, sc);
             for j in 0..n {
-                out[sc.order[s + j] as usize] = sc.g[3][j];
+                out[sc.order[j] as usize] = sc.g[3][j];
             }
         }
     }
@@ -859,9 +854,12 @@ impl PoreField {
             // Neighbours give at least the distance to this cell's faces:
             // keep the points nearer to those than to the own pore.
             for j in 0..n {
-                (p[0][np], p[1][np], p[2][np], p[3][np]) = (gx[j], gy[j], gz[j], best[j]);
                 at[np] = j as u16;
                 np += (best[j] > -terms.bd[j]) as usize;
+            }
+            for t in 0..np {
+                let j = at[t] as usize;
+                (p[0][t], p[1][t], p[2][t], p[3][t]) = (gx[j], gy[j], gz[j], best[j]);
             }
         } else {
             best.fill(cap);
