@@ -862,6 +862,13 @@ impl PoreField {
             }
             // Neighbours give at least the distance to this cell's faces:
             // keep the points nearer to those than to the own pore.
+            let mut any = false;
+            for j in 0..n {
+                any |= best[j] > -terms.bd[j];
+            }
+            if !any {
+                return;
+            }
             for j in 0..n {
                 at[np] = j as u16;
                 np += (best[j] > -terms.bd[j]) as usize;
