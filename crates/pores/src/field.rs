@@ -30,8 +30,8 @@
 //! point's value, and first a bound over the group's bounding box rules out
 //! most neighbours at once. Skipped terms cannot lower the minimum, so the
 //! batch gives the point values up to f32 rounding; slicing the bone of
-//! `bench/run pores` costs about 1.6 times slicing a gyroid of its cell
-//! size.
+//! `bench/run pores` costs 1.6 to 2 times slicing a gyroid of its cell
+//! size (about 4 times with the earlier f64 batch).
 //!
 //! Bounds: every term is Lipschitz (the box functions with constant 1, the
 //! 2D signed distances with 1, the 3D pores with the constant of their
