@@ -4,7 +4,9 @@
 use crate::cubemap::CubeMap;
 use crate::curve::{Quad, P2};
 use crate::error::PoreError;
-use crate::field::{neighbours, CellBox, Fast3, Index, Pore3, PoreField, Pores as FieldPores};
+use crate::field::{
+    neighbours, CellBox, Fast3, Fast3f, Index, LeafBoxF, Pore3, PoreField, Pores as FieldPores,
+};
 use crate::pore2::{self, MAX_KAPPA};
 use crate::pore3::TEXELS;
 use crate::pore3::{self, KAPPA};
@@ -548,6 +550,11 @@ impl Pores {
                 .collect(),
             FieldPores::Two(_) => Vec::new(),
         };
+        let fast3f = fast3
+            .iter()
+            .map(|f| Fast3f::new(f, &tables, TEXELS))
+            .collect();
+        let leaf_box_f = leaf_box.iter().map(LeafBoxF::new).collect();
         let dropped = tree.dropped;
         let name = format!(
             "kou-tan pores ({dim}D, {pore_count} pores, {} cells, seed {seed})",
@@ -566,6 +573,8 @@ impl Pores {
             pores,
             texels: TEXELS,
             tables,
+            fast3f,
+            leaf_box_f,
             fast3,
             cap,
             lip,

@@ -294,3 +294,110 @@ fn bad_inputs_are_clear_errors() {
     }
     let _ = Dim::Two;
 }
+
+/// The f32 batch on the blocks a slicer or mesher hands it (coherent
+/// points: a 16 x 16 tile of pixels, a row across many cells, a small
+/// cube of voxels) and on scattered points (more leaves in one block than
+/// the batch groups, which take the scalar path), against the f64 point
+/// values. Both the own-cell path and the neighbour passes are hit: the
+/// values span pores, walls and the cap.
+#[test]
+fn batch_on_coherent_blocks_matches_the_point_values() {
+    for sub in [Subdivision::Tree, Subdivision::TMesh { percent: 0.5 }] {
+        let b = Pores::build(
+            &ball(),
+            [[-1.0; 3], [1.0; 3]],
+            graded_size(),
+            Spec::Constant(0.75),
+            5,
+            &Options {
+                subdivision: sub,
+                ..Options::default()
+            },
+        )
+        .unwrap();
+        let f = &b.field;
+        let cap = f.cap();
+        let mut blocks: Vec<Vec<[f32; 3]>> = Vec::new();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut unit = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..400 {
+            let o = [0.0; 3].map(|_: f64| -1.1 + 2.2 * unit());
+            let px = 0.004 + 0.02 * unit();
+            // A tile of 16 x 16 pixels at one height.
+            blocks.push(
+                (0..256)
+                    .map(|q| {
+                        let (i, j) = ((q % 16) as f64, (q / 16) as f64);
+                        [(o[0] + i * px) as f32, (o[1] + j * px) as f32, o[2] as f32]
+                    })
+                    .collect(),
+            );
+            // A cube of 6^3 voxels.
+            blocks.push(
+                (0..216)
+                    .map(|q| {
+                        let ijk = [q % 6, (q / 6) % 6, q / 36];
+                        std::array::from_fn(|a| (o[a] + ijk[a] as f64 * px) as f32)
+                    })
+                    .collect(),
+            );
+        }
+        for k in 0..20 {
+            let (yv, zv) = (-1.0 + 0.1 * k as f64, 0.35 - 0.03 * k as f64);
+            blocks.push(
+                (0..256)
+                    .map(|i| {
+                        [
+                            (-1.15 + 2.3 * i as f64 / 255.0) as f32,
+                            yv as f32,
+                            zv as f32,
+                        ]
+                    })
+                    .collect(),
+            );
+        }
+        for _ in 0..8 {
+            blocks.push(
+                (0..256)
+                    .map(|_| [0; 3].map(|_| (-1.2 + 2.4 * unit()) as f32))
+                    .collect(),
+            );
+        }
+        let (mut pore, mut wall, mut capped, mut worst) = (0, 0, 0, 0.0f64);
+        for pts in &blocks {
+            let xs: Vec<f32> = pts.iter().map(|p| p[0]).collect();
+            let ys: Vec<f32> = pts.iter().map(|p| p[1]).collect();
+            let zs: Vec<f32> = pts.iter().map(|p| p[2]).collect();
+            let mut out = vec![0.0f32; pts.len()];
+            f.eval_batch(&xs, &ys, &zs, &mut out);
+            for (p, &v) in pts.iter().zip(&out) {
+                let e = f.eval(p.map(|c| c as f64));
+                let err = (v as f64 - e).abs();
+                assert!(
+                    err <= 2e-6 * (1.0 + e.abs()),
+                    "batch {v} vs point {e} at {p:?}"
+                );
+                worst = worst.max(err);
+                if e < 0.0 {
+                    pore += 1;
+                } else if e < cap {
+                    wall += 1;
+                } else {
+                    capped += 1;
+                }
+            }
+        }
+        let total = pore + wall + capped;
+        assert!(
+            pore > total / 5 && wall > total / 20,
+            "{pore} {wall} {capped}"
+        );
+        assert!(worst < 2e-6, "{worst}");
+    }
+}
