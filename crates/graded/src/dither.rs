@@ -5,8 +5,9 @@
 //! lowest y) and `layers` layers, streamed bottom to top: a source callback
 //! fills, for layer `k`, `materials` fractions per voxel and the inside
 //! mask; a sink receives each finished layer as one byte per voxel, the
-//! material index, or [`OUTSIDE`]. Memory holds two layers of fractions and
-//! two of diffusion error, whatever the layer count.
+//! material index, or [`OUTSIDE`]. Memory holds three layers of fractions (one
+//! being computed while the one two below is dithered) and two of
+//! diffusion error, whatever the layer count.
 //!
 //! Fractions are read as follows: the first `materials - 1` are clamped to
 //! `[0, 1]` (NaN counts as 0) and scaled down if they sum to more than 1;
@@ -53,8 +54,10 @@ pub const MAX_MATERIALS: usize = 255;
 pub const DEFAULT_MEMORY_LIMIT: u64 = 8 << 30;
 
 /// The layer source: `source(k, fractions, inside)` fills layer `k`'s
-/// fractions (`materials` per voxel) and inside mask.
-pub type LayerSource<'a> = dyn FnMut(usize, &mut [f32], &mut [bool]) + 'a;
+/// fractions (`materials` per voxel) and inside mask. Layers are asked for
+/// in order, one at a time, while the layers below are dithered on another
+/// thread (hence `Send`).
+pub type LayerSource<'a> = dyn FnMut(usize, &mut [f32], &mut [bool]) + Send + 'a;
 
 /// How fractions become one material per voxel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -101,8 +104,9 @@ impl Layout {
         let plane = (self.nx as u128) * (self.ny as u128);
         let n = self.materials as u128;
         let c = n.saturating_sub(1).max(1);
-        // Two layers of fractions and masks, two of error, one of output.
-        plane * (2 * (4 * n + 1) + 2 * 4 * c + 1)
+        // Three layers of fractions and masks (one being loaded while the
+        // one two below is dithered), two of error, one of output.
+        plane * (3 * (4 * n + 1) + 2 * 4 * c + 1)
     }
 
     fn check(&self, limit: u64) -> Result<()> {
@@ -170,7 +174,7 @@ pub fn dither(
     } = layout;
     let plane = nx * ny;
     let c = n - 1;
-    let mut slots = [0, 1].map(|_| Slot {
+    let mut slots = [0, 1, 2].map(|_| Slot {
         frac: vec![0.0; plane * n],
         mask: vec![false; plane],
     });
@@ -184,31 +188,40 @@ pub fn dither(
         Method::ErrorDiffusion if c > 0 => Some(Diffuser::new(nx, ny, c)),
         _ => None,
     };
-    load(&mut slots[0], 0, n, source, &mut report);
+    // Layer k is dithered while layer k + 2 is loaded: slot k % 3 holds
+    // layer k; the diffusion reads the next layer's mask.
+    for (k, slot) in slots.iter_mut().enumerate().take(layers.min(2)) {
+        let sums = load(slot, k, n, source);
+        add(&mut report.integrals, sums);
+    }
     for k in 0..layers {
-        let (cur, next) = {
-            let [a, b] = &mut slots;
-            if k % 2 == 0 {
-                (a, b)
-            } else {
-                (b, a)
+        let (cur, next, far) = {
+            let [a, b, d] = &mut slots;
+            match k % 3 {
+                0 => (&*a, &*b, d),
+                1 => (&*b, &*d, a),
+                _ => (&*d, &*a, b),
             }
         };
-        if k + 1 < layers {
-            load(next, k + 1, n, source, &mut report);
-        }
         let next_mask = (k + 1 < layers).then_some(&next.mask[..]);
-        match (method, ed.as_mut()) {
+        let dither_layer = |ed: &mut Option<Diffuser>, out: &mut [u8]| match (method, ed.as_mut()) {
             (_, _) if c == 0 => {
                 for (o, &m) in out.iter_mut().zip(&cur.mask) {
                     *o = if m { 0 } else { OUTSIDE };
                 }
             }
-            (Method::ErrorDiffusion, Some(d)) => d.layer(k, cur, next_mask, &mut out),
-            (Method::Stochastic { seed }, _) => select_layer(k, cur, nx, n, &mut out, |i, j| {
+            (Method::ErrorDiffusion, Some(d)) => d.layer(k, cur, next_mask, out),
+            (Method::Stochastic { seed }, _) => select_layer(k, cur, nx, n, out, |i, j| {
                 uniform(seed, i as u64, j as u64, k as u64)
             }),
-            _ => select_layer(k, cur, nx, n, &mut out, |i, j| bayer(i, j, k)),
+            _ => select_layer(k, cur, nx, n, out, |i, j| bayer(i, j, k)),
+        };
+        let (_, sums) = rayon::join(
+            || dither_layer(&mut ed, &mut out),
+            || (k + 2 < layers).then(|| load(far, k + 2, n, &mut *source)),
+        );
+        if let Some(s) = sums {
+            add(&mut report.integrals, s);
         }
         for &m in &out {
             if m != OUTSIDE {
@@ -223,22 +236,15 @@ pub fn dither(
 }
 
 /// Calls the source for layer `k` on cleared buffers, then normalises the
-/// fractions of inside voxels (the only ones read) and adds them to the
-/// integrals (per row, summed in order, so
-/// the totals do not depend on the thread count).
-fn load(
-    slot: &mut Slot,
-    k: usize,
-    n: usize,
-    source: &mut LayerSource<'_>,
-    report: &mut DitherReport,
-) {
+/// fractions of inside voxels (the only ones read); returns their sums per
+/// material for each block of rows, in order (so the totals do not depend
+/// on the thread count).
+fn load(slot: &mut Slot, k: usize, n: usize, source: &mut LayerSource<'_>) -> Vec<Vec<f64>> {
     slot.frac.iter_mut().for_each(|v| *v = 0.0);
     slot.mask.iter_mut().for_each(|v| *v = false);
     source(k, &mut slot.frac, &mut slot.mask);
     let row = 4096usize;
-    let sums: Vec<Vec<f64>> = slot
-        .frac
+    slot.frac
         .par_chunks_mut(row * n)
         .zip(slot.mask.par_chunks(row))
         .map(|(f, m)| {
@@ -253,9 +259,13 @@ fn load(
             }
             s
         })
-        .collect();
+        .collect()
+}
+
+/// Adds the block sums of [`load`] to the integrals, in order.
+fn add(integrals: &mut [f64], sums: Vec<Vec<f64>>) {
     for s in sums {
-        for (a, b) in report.integrals.iter_mut().zip(s) {
+        for (a, b) in integrals.iter_mut().zip(s) {
             *a += b;
         }
     }
