@@ -853,7 +853,6 @@ impl SourceBand<'_> {
     }
 
     /// Channel `c` at the inside voxels of a tile.
-    #[allow(clippy::too_many_arguments)]
     fn channel_tile(
         &self,
         ev: &mut Evals,
