@@ -20,7 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 
 const THREADS: usize = 2;
-const REPS: usize = 3;
+const REPS: usize = 5;
 
 /// A case: example file, pixel size and layer thickness.
 struct Case {
@@ -34,20 +34,20 @@ const CASES: &[Case] = &[
     Case {
         name: "bezier_cube",
         file: "park_fig1_bezier_cube.hf",
-        pixel: 0.004,
-        layer: 0.02,
+        pixel: 0.003,
+        layer: 0.01,
     },
     Case {
         name: "wiffle_gradient",
         file: "park_fig4_wiffle_gradient.hf",
-        pixel: 0.008,
-        layer: 0.04,
+        pixel: 0.005,
+        layer: 0.02,
     },
     Case {
         name: "femur_gradient",
         file: "park_fig6_femur_gradient.hf",
-        pixel: 0.008,
-        layer: 0.02,
+        pixel: 0.007,
+        layer: 0.015,
     },
 ];
 

@@ -37,6 +37,11 @@ const LEAF: usize = 16;
 /// Tiles at least this many pixels on a side may get their own tape.
 const SIMPLIFY_TILE: usize = 32;
 
+/// Tiles below [`SIMPLIFY_TILE`] are bounded only when their parent's
+/// bounds spanned at most this many grey levels (else bounding them rarely
+/// pays: smooth channels vary by many levels over a tile).
+const CLOSE_LEVELS: u8 = 8;
+
 /// Grey level of attribute value `s`: `round(255 clamp(s, 0, 1))`.
 fn grey(s: f32) -> u8 {
     (255.0 * s.clamp(0.0, 1.0)).round() as u8
@@ -136,7 +141,7 @@ impl AttributeStack {
                 };
                 for i0 in (0..nx).step_by(TILE) {
                     let w = TILE.min(nx - i0);
-                    band.tile(ev, rows, [i0, j0], [w, h]);
+                    band.tile(ev, rows, [i0, j0], [w, h], true);
                 }
             },
         );
@@ -160,7 +165,9 @@ impl Band<'_> {
         (self.j0 + self.h - 1 - j) * self.grid.nx + i
     }
 
-    fn tile(&self, ev: &mut Evals, rows: &mut [u8], at: [usize; 2], size: [usize; 2]) {
+    /// Fills the tile at pixel `at` of size `size`. Small tiles are bounded
+    /// only when `close`: their parent's bounds spanned few grey levels.
+    fn tile(&self, ev: &mut Evals, rows: &mut [u8], at: [usize; 2], size: [usize; 2], close: bool) {
         let (grid, layer) = (self.grid, self.layer);
         let cols = at[0]..at[0] + size[0];
         let inside = (at[1]..at[1] + size[1])
@@ -168,6 +175,10 @@ impl Band<'_> {
             .sum::<usize>();
         if inside == 0 {
             return;
+        }
+        let big = size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE;
+        if !(big || close) {
+            return self.split_or_sample(ev, rows, at, size, false);
         }
         // The pixel centres' extent, as given to the batch evaluator too.
         let xs = span(grid.x(at[0]), grid.x(at[0] + size[0] - 1));
@@ -185,23 +196,40 @@ impl Band<'_> {
             }
             return;
         }
-        if size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE {
+        if big {
             let short = ev
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
                 .filter(|t| 10 * t.len() < 8 * ev.tape.len());
             if let Some(t) = short {
                 let mut local = Evals::new(&t);
-                return self.tile(&mut local, rows, at, size);
+                return self.tile(&mut local, rows, at, size, close);
             }
         }
+        let near = !b.may_be_nan()
+            && b.lo <= b.hi
+            && grey(b.hi as f32).saturating_sub(grey(b.lo as f32)) <= CLOSE_LEVELS;
+        self.split_or_sample(ev, rows, at, size, near)
+    }
+
+    /// Quarters a tile, or samples a leaf at its inside pixels.
+    fn split_or_sample(
+        &self,
+        ev: &mut Evals,
+        rows: &mut [u8],
+        at: [usize; 2],
+        size: [usize; 2],
+        close: bool,
+    ) {
+        let (grid, layer) = (self.grid, self.layer);
+        let cols = at[0]..at[0] + size[0];
         if size[0] > LEAF || size[1] > LEAF {
             let hw = size[0].div_ceil(2);
             let hh = size[1].div_ceil(2);
             for (dx, w) in [(0, hw), (hw, size[0] - hw)] {
                 for (dy, h) in [(0, hh), (hh, size[1] - hh)] {
                     if w > 0 && h > 0 {
-                        self.tile(ev, rows, [at[0] + dx, at[1] + dy], [w, h]);
+                        self.tile(ev, rows, [at[0] + dx, at[1] + dy], [w, h], close);
                     }
                 }
             }
