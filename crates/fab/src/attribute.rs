@@ -50,7 +50,7 @@ fn grey(s: f32) -> u8 {
 /// The grey level every value of `b` takes, with a margin wide enough
 /// that f32 evaluation of any point of the box lands on it too.
 fn uniform_grey(b: Interval) -> Option<u8> {
-    if b.may_be_nan() || !(b.lo <= b.hi) {
+    if b.may_be_nan() || b.lo.is_nan() || b.hi.is_nan() || b.lo > b.hi {
         return None;
     }
     let m = 1e-4 * b.lo.abs().max(b.hi.abs()).max(1.0);
