@@ -5,6 +5,7 @@
 mod analyze;
 mod eval;
 mod hyperfun;
+mod materials;
 mod mesh;
 mod parts;
 mod pores;
@@ -63,6 +64,10 @@ const SUITES: &[(&str, &str)] = &[
         "per-region tape simplification vs the full tape: meshing and slicing three part-with-lattice models",
     ),
     (
+        "materials",
+        "graded stacks (attribute grey, dithered RGBA) vs the plain slice stack, three Park examples",
+    ),
+    (
         "slice",
         "one 2048^2 layer vs fidget's 2D rasteriser, a 200-layer PNG stack, a 1024^2 render",
     ),
@@ -88,6 +93,7 @@ fn main() {
         "python" => python::run(),
         "slice" => slice::run(),
         "hyperfun" => hyperfun::run(),
+        "materials" => materials::run(),
         "structures" => structures::run(),
         "3mf" => threemf::run(),
         "studio" => studio::run(),

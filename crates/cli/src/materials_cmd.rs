@@ -6,7 +6,9 @@ use crate::common::{frame, load_model, ModelArgs, RunArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use microfrep::graded::dither::Method;
-use microfrep::graded::stack::{preset, write_material_stack, MaterialStack, Palette, StackGrid};
+use microfrep::graded::stack::{
+    preset, write_material_stack, MaterialStack, Palette, ShapeSource, StackGrid,
+};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -81,34 +83,10 @@ pub fn run(a: MaterialsArgs) -> Result<()> {
     let mut opts = MaterialStack::new(palette);
     opts.method = method;
     opts.preset = a.preset.clone();
-    let shape = &m.shape;
-    let mut ev = microfrep::core::BatchEval::new(shape.outputs());
-    let outs: Vec<usize> = (0..n - 1).map(|k| shape.attribute_output(k)).collect();
+    let src = ShapeSource::new(&m.shape, &grid, n)?;
     let (nx, ny) = (grid.nx, grid.ny);
-    let mut source = |k: usize, fractions: &mut [f32], inside: &mut [bool]| {
-        let (mut x, mut y, mut z) = (
-            vec![0f32; nx * ny],
-            vec![0f32; nx * ny],
-            vec![0f32; nx * ny],
-        );
-        for j in 0..ny {
-            for i in 0..nx {
-                let q = i + nx * j;
-                (x[q], y[q], z[q]) = (grid.x(i) as f32, grid.y(j) as f32, grid.z(k) as f32);
-            }
-        }
-        let mut v = vec![0f32; nx * ny];
-        ev.eval_output(0, &x, &y, &z, &mut v);
-        for (d, &f) in inside.iter_mut().zip(&v) {
-            *d = f >= 0.0;
-        }
-        for (c, &o) in outs.iter().enumerate() {
-            ev.eval_output(o, &x, &y, &z, &mut v);
-            for q in 0..nx * ny {
-                fractions[q * n + c] = if v[q].is_nan() { 0.0 } else { v[q] };
-            }
-        }
-    };
+    let mut source =
+        |k: usize, fractions: &mut [f32], inside: &mut [bool]| src.fill(k, fractions, inside);
     let bar = a.run.bar("layers");
     bar.set_message("dithering");
     let r = write_material_stack(&a.output, &grid, &opts, &mut source, &|d, t| {

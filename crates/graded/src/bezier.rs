@@ -532,10 +532,70 @@ impl Field for BezierBox {
     }
 
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
-        for i in 0..out.len() {
-            out[i] = self
-                .value_grad([x[i] as f64, y[i] as f64, z[i] as f64], false)
-                .0 as f32;
+        // Lanes of points through the same f64 operations in the same order
+        // as `value_grad`, so each result has the same bits as `eval`.
+        let [l, m, n] = self.deg;
+        let mut q = 0;
+        while q < out.len() {
+            let len = LANES.min(out.len() - q);
+            let mut b = [[[0.0f64; LANES]; MAX_DEGREE + 1]; 3];
+            for (a, c) in [x, y, z].into_iter().enumerate() {
+                let side = self.max[a] - self.min[a];
+                let mut t = [0.0f64; LANES];
+                for (t, &c) in t.iter_mut().zip(&c[q..q + len]) {
+                    *t = ((c as f64 - self.min[a]) / side).clamp(0.0, 1.0);
+                }
+                bernstein_lanes(self.deg[a], &t, &mut b[a]);
+            }
+            let mut val = [0.0f64; LANES];
+            for k in 0..=n {
+                let mut s = [0.0f64; LANES];
+                for j in 0..=m {
+                    let row = &self.w[(l + 1) * (j + (m + 1) * k)..][..=l];
+                    let mut r = [-0.0f64; LANES];
+                    for (w, bi) in row.iter().zip(&b[0]) {
+                        for e in 0..LANES {
+                            r[e] += w * bi[e];
+                        }
+                    }
+                    for e in 0..LANES {
+                        s[e] += b[1][j][e] * r[e];
+                    }
+                }
+                for e in 0..LANES {
+                    val[e] += b[2][k][e] * s[e];
+                }
+            }
+            for (o, v) in out[q..q + len].iter_mut().zip(val) {
+                *o = v as f32;
+            }
+            q += len;
+        }
+    }
+}
+
+/// Points evaluated together by [`BezierBox`]'s batch evaluation.
+const LANES: usize = 8;
+
+/// [`bernstein`] (without derivatives) for `LANES` parameters at once, the
+/// same operations per lane: `out[i][e]` is `B_i^n(t[e])`.
+fn bernstein_lanes(n: usize, t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
+    let mut s = [0.0f64; LANES];
+    for e in 0..LANES {
+        s[e] = 1.0 - t[e];
+    }
+    out[0] = [1.0; LANES];
+    for level in 1..=n {
+        for e in 0..LANES {
+            out[level][e] = t[e] * out[level - 1][e];
+        }
+        for i in (1..level).rev() {
+            for e in 0..LANES {
+                out[i][e] = s[e] * out[i][e] + t[e] * out[i - 1][e];
+            }
+        }
+        for e in 0..LANES {
+            out[0][e] *= s[e];
         }
     }
 }

@@ -34,6 +34,7 @@ use crate::dither::{
     dither, DitherReport, LayerSource, Layout, Method, DEFAULT_MEMORY_LIMIT, OUTSIDE,
 };
 use crate::error::{io_at, Error, Result};
+use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape};
 use rayon::prelude::*;
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -676,4 +677,254 @@ pub fn write_grey_stack(
             bytes,
         })
     })
+}
+
+/// The layer source of a [`Shape`] for [`write_material_stack`] (what
+/// `microfrep materials` writes): voxel `q` is inside where the value is
+/// `>= 0` at its centre, and material `c < materials - 1` takes attribute
+/// channel `c` there (NaN as 0; the last material takes the remainder).
+///
+/// The value and each channel are compiled alone, once. A layer is filled
+/// in bands of rows in parallel; tiles of voxels are classified by interval
+/// bounds of the value (as the slicer does: proven outside are skipped,
+/// proven inside need no sample), channels are evaluated only at inside
+/// voxels, with a tape shortened where the intervals decide branches
+/// ([`Simplify::Exact`], the same bits).
+pub struct ShapeSource {
+    value: Tape,
+    channels: Vec<Tape>,
+    grid: StackGrid,
+}
+
+/// Side of the tiles that bands of rows are cut into.
+const TILE: usize = 64;
+/// Side of the leaves sampled in one batch (16 x 16 = one block).
+const LEAF: usize = 16;
+/// Tiles at least this many voxels on a side may get their own tape.
+const SIMPLIFY_TILE: usize = 32;
+
+/// The interval from `a` to `b` (`a <= b`) widened to hold their f32
+/// roundings, which is what the batch evaluator is given.
+fn span(a: f64, b: f64) -> Interval {
+    let (fa, fb) = (a as f32 as f64, b as f32 as f64);
+    Interval::new(a.min(fa), b.max(fb))
+}
+
+/// An evaluator pair of one tape.
+struct Evals {
+    tape: Tape,
+    batch: BatchEval,
+    interval: IntervalEval,
+}
+
+impl Evals {
+    fn new(tape: &Tape) -> Evals {
+        Evals {
+            tape: tape.clone(),
+            batch: BatchEval::new(tape),
+            interval: IntervalEval::new(tape),
+        }
+    }
+}
+
+/// One band of rows of a layer being filled.
+struct SourceBand<'a> {
+    grid: &'a StackGrid,
+    z: f64,
+    /// First row of the band.
+    j0: usize,
+    /// Values per voxel in `fractions`.
+    n: usize,
+}
+
+impl ShapeSource {
+    /// The source of `materials` materials (`materials - 1` attribute
+    /// channels of `shape` are read) on `grid`.
+    pub fn new(shape: &Shape, grid: &StackGrid, materials: usize) -> Result<ShapeSource> {
+        let have = shape.attributes().len();
+        if materials == 0 || materials - 1 > have {
+            return Err(Error::Invalid(format!(
+                "{materials} materials need {} attribute channels; the model has {have}",
+                materials.max(1) - 1
+            )));
+        }
+        Ok(ShapeSource {
+            value: shape.tape().clone(),
+            channels: shape.attributes()[..materials - 1]
+                .iter()
+                .map(|a| Tape::new(&a.expr))
+                .collect(),
+            grid: grid.clone(),
+        })
+    }
+
+    /// Fills layer `k` into cleared buffers: `fractions` holds
+    /// `channels + 1` values per voxel (voxel `i + nx j`), `inside` the
+    /// mask (the [`LayerSource`] contract).
+    pub fn fill(&self, k: usize, fractions: &mut [f32], inside: &mut [bool]) {
+        let g = &self.grid;
+        let n = self.channels.len() + 1;
+        let row = g.nx;
+        assert_eq!(inside.len(), g.nx * g.ny, "mask size");
+        assert_eq!(fractions.len(), g.nx * g.ny * n, "fraction buffer size");
+        let z = g.z(k);
+        fractions
+            .par_chunks_mut(TILE * row * n)
+            .zip(inside.par_chunks_mut(TILE * row))
+            .enumerate()
+            .for_each_init(
+                || {
+                    (
+                        Evals::new(&self.value),
+                        self.channels.iter().map(Evals::new).collect::<Vec<_>>(),
+                    )
+                },
+                |(value, channels), (b, (frac, mask))| {
+                    let band = SourceBand {
+                        grid: g,
+                        z,
+                        j0: b * TILE,
+                        n,
+                    };
+                    let h = mask.len() / row;
+                    for i0 in (0..g.nx).step_by(TILE) {
+                        let w = TILE.min(g.nx - i0);
+                        band.mask_tile(value, mask, [i0, band.j0], [w, h]);
+                        for (c, ev) in channels.iter_mut().enumerate() {
+                            band.channel_tile(ev, c, mask, frac, [i0, band.j0], [w, h]);
+                        }
+                    }
+                },
+            );
+    }
+}
+
+impl SourceBand<'_> {
+    /// Index in the band's buffers of voxel `(i, j)`.
+    fn at(&self, i: usize, j: usize) -> usize {
+        (j - self.j0) * self.grid.nx + i
+    }
+
+    fn bounds(&self, ev: &mut Evals, at: [usize; 2], size: [usize; 2]) -> Interval {
+        let g = self.grid;
+        let xs = span(g.x(at[0]), g.x(at[0] + size[0] - 1));
+        let ys = span(g.y(at[1]), g.y(at[1] + size[1] - 1));
+        ev.interval.eval(xs, ys, span(self.z, self.z))
+    }
+
+    /// The inside mask over a tile.
+    fn mask_tile(&self, ev: &mut Evals, mask: &mut [bool], at: [usize; 2], size: [usize; 2]) {
+        let b = self.bounds(ev, at, size);
+        if b.hi < 0.0 {
+            return;
+        }
+        if b.lo >= 0.0 && !b.may_be_nan() {
+            for j in at[1]..at[1] + size[1] {
+                let r = self.at(at[0], j);
+                mask[r..r + size[0]].fill(true);
+            }
+            return;
+        }
+        if size[0] > LEAF || size[1] > LEAF {
+            for (a, s) in quarters(at, size) {
+                self.mask_tile(ev, mask, a, s);
+            }
+            return;
+        }
+        let g = self.grid;
+        let zf = self.z as f32;
+        {
+            let (x, y, zz) = ev.batch.coords_mut();
+            let mut q = 0;
+            for j in at[1]..at[1] + size[1] {
+                for i in at[0]..at[0] + size[0] {
+                    (x[q], y[q], zz[q]) = (g.x(i) as f32, g.y(j) as f32, zf);
+                    q += 1;
+                }
+            }
+        }
+        let v = ev.batch.eval_loaded(size[0] * size[1]);
+        for (dj, vs) in v.chunks(size[0]).enumerate() {
+            let r = self.at(at[0], at[1] + dj);
+            for (m, &f) in mask[r..r + size[0]].iter_mut().zip(vs) {
+                *m = f >= 0.0;
+            }
+        }
+    }
+
+    /// Channel `c` at the inside voxels of a tile.
+    fn channel_tile(
+        &self,
+        ev: &mut Evals,
+        c: usize,
+        mask: &[bool],
+        frac: &mut [f32],
+        at: [usize; 2],
+        size: [usize; 2],
+    ) {
+        let rows = at[1]..at[1] + size[1];
+        let cols = at[0]..at[0] + size[0];
+        let any = rows.clone().any(|j| {
+            let r = self.at(at[0], j);
+            mask[r..r + size[0]].iter().any(|&m| m)
+        });
+        if !any {
+            return;
+        }
+        if size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE {
+            self.bounds(ev, at, size);
+            let short = ev
+                .tape
+                .simplify(ev.interval.values(), Simplify::Exact)
+                .filter(|t| 10 * t.len() < 8 * ev.tape.len());
+            if let Some(t) = short {
+                let mut local = Evals::new(&t);
+                return self.channel_tile(&mut local, c, mask, frac, at, size);
+            }
+        }
+        if size[0] > LEAF || size[1] > LEAF {
+            for (a, s) in quarters(at, size) {
+                self.channel_tile(ev, c, mask, frac, a, s);
+            }
+            return;
+        }
+        let g = self.grid;
+        let zf = self.z as f32;
+        let mut idx = [0usize; LEAF * LEAF];
+        let mut m = 0;
+        {
+            let (x, y, zz) = ev.batch.coords_mut();
+            for j in rows {
+                let yf = g.y(j) as f32;
+                for i in cols.clone() {
+                    let q = self.at(i, j);
+                    if mask[q] {
+                        (x[m], y[m], zz[m]) = (g.x(i) as f32, yf, zf);
+                        idx[m] = q;
+                        m += 1;
+                    }
+                }
+            }
+        }
+        let s = ev.batch.eval_loaded(m);
+        let n = self.n;
+        for (&q, &v) in idx[..m].iter().zip(s) {
+            frac[q * n + c] = if v.is_nan() { 0.0 } else { v };
+        }
+    }
+}
+
+/// The four quarters of a tile (fewer when a side is one voxel).
+fn quarters(at: [usize; 2], size: [usize; 2]) -> Vec<([usize; 2], [usize; 2])> {
+    let hw = size[0].div_ceil(2);
+    let hh = size[1].div_ceil(2);
+    let mut out = Vec::with_capacity(4);
+    for (dx, w) in [(0, hw), (hw, size[0] - hw)] {
+        for (dy, h) in [(0, hh), (hh, size[1] - hh)] {
+            if w > 0 && h > 0 {
+                out.push(([at[0] + dx, at[1] + dy], [w, h]));
+            }
+        }
+    }
+    out
 }

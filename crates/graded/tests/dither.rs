@@ -11,7 +11,7 @@ fn run(
     layers: usize,
     n: usize,
     method: Method,
-    f: impl Fn(usize, usize, usize, &mut [f32]) -> bool,
+    f: impl Fn(usize, usize, usize, &mut [f32]) -> bool + Sync,
 ) -> (DitherReport, Vec<u8>, Vec<f32>) {
     let mut all = Vec::new();
     let mut fracs = Vec::new();
@@ -115,7 +115,7 @@ fn error_diffusion_preserves_volume_and_local_shares_on_gradients_and_constants(
     type Case<'a> = (
         &'a str,
         usize,
-        Box<dyn Fn(usize, usize, usize, &mut [f32]) -> bool>,
+        Box<dyn Fn(usize, usize, usize, &mut [f32]) -> bool + Sync>,
     );
     let cases: Vec<Case> = vec![
         ("gradient 2", 2, Box::new(grad2)),

@@ -1,0 +1,82 @@
+//! The attribute stack's culled, per-channel evaluation against two
+//! straightforward references: the shape's whole output tape evaluated in
+//! f32 at every pixel centre (the same bytes), and the f64 point evaluator
+//! of the channel at every pixel centre (within one grey level).
+
+use microfrep_core::{Expr, PointEval, Shape, Tape};
+use microfrep_fab::attribute::reference_layer_pixels;
+use microfrep_fab::{rasterize, AttributeStack, SliceGrid};
+
+/// A ball of radius 1 with a hole along z, graded three ways: a smooth
+/// field above z = 0.2 and 0 below (a branch intervals decide), a radial
+/// field clamped at both ends, and a square root NaN where x < -0.5.
+fn graded_ball() -> Shape {
+    let [x, y, z] = Expr::xyz();
+    let r2 = x.square() + y.square() + z.square();
+    let ball = 1.0 - &r2;
+    let hole = x.square() + y.square() - 0.04;
+    let value = microfrep_core::frep::intersection(&ball, &hole, 0.0);
+    let smooth = 0.5 + 0.4 * (3.0 * &x).sin() * (2.0 * &y).cos();
+    let s1 = Expr::select(z.ge(0.2), smooth, Expr::constant(0.0));
+    let s2 = 1.6 - 2.0 * &r2;
+    let s3 = (&x + 0.5).sqrt();
+    Shape::new(value)
+        .with_attribute("s1", s1)
+        .with_attribute("s2", s2)
+        .with_attribute("s3", s3)
+}
+
+#[test]
+fn culled_attribute_layers_equal_full_evaluation() {
+    let shape = graded_ball();
+    let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.07, 0.011).unwrap();
+    assert!(grid.nx > 150 && grid.layers > 20);
+    for channel in 0..3 {
+        let stack = AttributeStack::new(&shape, channel).unwrap();
+        let attr = Tape::new(&shape.attributes()[channel].expr);
+        let mut point = PointEval::new(&attr);
+        let (mut grey, mut levels) = (0usize, std::collections::BTreeSet::new());
+        for k in 0..grid.layers {
+            let fast = stack.layer_pixels(&shape, &grid, k);
+            let full = reference_layer_pixels(&shape, &grid, k, channel);
+            assert_eq!(fast, full, "channel {channel}, layer {k}");
+            // The f64 reference, pixel by pixel, at the f32 pixel centres.
+            let layer = rasterize(&shape, &grid, k);
+            let (nx, ny) = (grid.nx, grid.ny);
+            for j in 0..ny {
+                for i in 0..nx {
+                    let got = fast[(ny - 1 - j) * nx + i];
+                    let p = [grid.x(i), grid.y(j), grid.z(k)].map(|c| c as f32 as f64);
+                    let s = point.eval(p);
+                    let want = if layer.inside(i, j) && !s.is_nan() {
+                        (255.0 * s.clamp(0.0, 1.0)).round()
+                    } else {
+                        0.0
+                    };
+                    assert!(
+                        (got as f64 - want).abs() <= 1.0,
+                        "channel {channel}, layer {k}, pixel ({i}, {j}): {got} vs {want}"
+                    );
+                    grey += usize::from(got > 0 && got < 255);
+                    levels.insert(got);
+                }
+            }
+        }
+        // The cases are not trivial: many intermediate levels.
+        assert!(
+            grey > 1000 && levels.len() > 50,
+            "channel {channel}: {grey} {}",
+            levels.len()
+        );
+    }
+}
+
+#[test]
+fn attribute_stack_refuses_missing_channel() {
+    let shape = graded_ball();
+    let e = AttributeStack::new(&shape, 3).unwrap_err().to_string();
+    assert!(
+        e.contains("attribute 4 does not exist") && e.contains("3 attribute"),
+        "{e}"
+    );
+}
