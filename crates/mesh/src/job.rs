@@ -22,9 +22,7 @@ use crate::memory::{self, Estimate, GIB};
 use crate::sampled::{sampled_volume, SampledVolume};
 use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
 use crate::write::colour::{channel_tape, scale_of, vertex_colours, ColourBy, ColourScale};
-use crate::write::{
-    check_colours, format_of, stream_mesh_coloured, write_mesh_coloured, MeshFormat,
-};
+use crate::write::{check_colours, format_of, stream_mesh_coloured, write_uncommitted, MeshFormat};
 use crate::{Grid, Mesh, MeshError, MeshOptions, Plan};
 use microfrep_core::{ErrorCensus, Shape};
 use std::path::Path;
@@ -210,7 +208,26 @@ pub fn mesh_to_file(
             Some(m) if !job.stream => m,
             _ => plan.run(&progress)?,
         };
-        let r = summary(&mesh);
+        let colours = match &job.colour {
+            Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
+            None => None,
+        };
+        colour_scale = colours.as_ref().map(|c| c.scale);
+        // The mesh is checked while it is written (the edge check is as
+        // costly as the encoding); the file is put in place only if the
+        // verdict passes, else dropping it removes it.
+        let (r, file) = rayon::join(
+            || summary(&mesh),
+            || {
+                write(
+                    format,
+                    out,
+                    &plan,
+                    &mesh,
+                    colours.as_ref().map(|c| &c.rgb[..]),
+                )
+            },
+        );
         let t = Tally {
             vertices: r.vertices as u64,
             triangles: r.triangles as u64,
@@ -219,18 +236,7 @@ pub fn mesh_to_file(
             bbox: r.bbox,
         };
         verdict(&t)?;
-        let colours = match &job.colour {
-            Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
-            None => None,
-        };
-        colour_scale = colours.as_ref().map(|c| c.scale);
-        write(
-            format,
-            out,
-            &plan,
-            &mesh,
-            colours.as_ref().map(|c| &c.rgb[..]),
-        )?;
+        file?.commit()?;
         summary_of(
             &opts,
             &plan,
@@ -255,9 +261,9 @@ fn write(
     plan: &Plan,
     mesh: &Mesh,
     colours: Option<&[[u8; 3]]>,
-) -> Result<(), MeshError> {
+) -> Result<microfrep_io::AtomicFile, MeshError> {
     let normals = format.wants_normals().then(|| plan.normals(mesh));
-    write_mesh_coloured(out, mesh, normals.as_deref(), colours)
+    write_uncommitted(out, mesh, normals.as_deref(), colours)
 }
 
 fn summary_of(

@@ -83,6 +83,20 @@ pub fn write_mesh_coloured(
     normals: Option<&[[f32; 3]]>,
     colours: Option<&[[u8; 3]]>,
 ) -> Result<(), MeshError> {
+    write_uncommitted(out, mesh, normals, colours)?.commit()?;
+    Ok(())
+}
+
+/// As [`write_mesh_coloured`], but the file is left under its temporary
+/// name: [`AtomicFile::commit`] puts it in place, dropping it removes it.
+/// Lets a job check the mesh while it is being written and commit only if
+/// the checks pass.
+pub fn write_uncommitted(
+    out: &Path,
+    mesh: &Mesh,
+    normals: Option<&[[f32; 3]]>,
+    colours: Option<&[[u8; 3]]>,
+) -> Result<AtomicFile, MeshError> {
     let format = format_of(out)?;
     if colours.is_some() {
         check_colours(format, out)?;
@@ -99,8 +113,7 @@ pub fn write_mesh_coloured(
     format
         .write(mesh, normals, colours, &mut f)
         .map_err(|e| MeshError::from(f.err(e)))?;
-    f.commit()?;
-    Ok(())
+    Ok(f)
 }
 
 /// An error unless `format` (of `out`) stores per-vertex colours.
