@@ -268,43 +268,18 @@ fn json_number(text: &str, key: &str) -> Option<f64> {
 /// The Python with PoreSpy: `MICROFREP_PORESPY_PYTHON`, or the venv under
 /// target/, created on first use when the registry is reachable.
 fn porespy_python(dir: &Path) -> Option<PathBuf> {
-    if let Ok(p) = std::env::var("MICROFREP_PORESPY_PYTHON") {
-        return Some(PathBuf::from(p));
-    }
-    let venv = PathBuf::from("target/porespy-venv");
-    let py = venv.join("bin/python");
-    let has = |py: &Path| {
-        Command::new(py)
-            .args(["-c", "import porespy"])
-            .output()
-            .is_ok_and(|o| o.status.success())
+    let spec = microfrep::io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_PORESPY_PYTHON",
+        venv: Path::new("target/porespy-venv"),
+        check: "import porespy",
+        packages: &["porespy"],
+        log: &dir.join("porespy-install.log"),
     };
-    if has(&py) {
-        return Some(py);
-    }
-    eprintln!(
-        "bench/run analyze: installing PoreSpy into {}",
-        venv.display()
-    );
-    let log = dir.join("porespy-install.log");
-    let ok = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "python3 -m venv {v} && {v}/bin/pip install porespy > {l} 2>&1",
-            v = venv.display(),
-            l = log.display()
-        ))
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok && has(&py) {
-        Some(py)
-    } else {
-        eprintln!(
-            "bench/run analyze: PoreSpy not available (see {}); its columns read na",
-            log.display()
-        );
-        None
-    }
+    microfrep::io::pyvenv::python_with(&spec)
+        .map_err(|e| {
+            eprintln!("bench/run analyze: PoreSpy not available ({e}); its columns read na")
+        })
+        .ok()
 }
 
 /// Runs bench/porespy_thickness.py on one phase.

@@ -377,38 +377,14 @@ fn libigl(
 /// The Python with libigl: `MICROFREP_LIBIGL_PYTHON`, or the venv under
 /// target/, created on first use.
 fn libigl_python(dir: &Path) -> Option<PathBuf> {
-    if let Ok(p) = std::env::var("MICROFREP_LIBIGL_PYTHON") {
-        return Some(PathBuf::from(p));
-    }
-    let venv = PathBuf::from("target/libigl-venv");
-    let py = venv.join("bin/python");
-    let has = |py: &Path| {
-        Command::new(py)
-            .args(["-c", "import igl, numpy"])
-            .output()
-            .is_ok_and(|o| o.status.success())
+    let spec = microfrep::io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_LIBIGL_PYTHON",
+        venv: Path::new("target/libigl-venv"),
+        check: "import igl, numpy",
+        packages: &["libigl", "numpy"],
+        log: &dir.join("libigl-install.log"),
     };
-    if has(&py) {
-        return Some(py);
-    }
-    eprintln!("bench/run parts: installing libigl into {}", venv.display());
-    let log = dir.join("libigl-install.log");
-    let ok = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "python3 -m venv {v} && {v}/bin/pip install libigl numpy > {l} 2>&1",
-            v = venv.display(),
-            l = log.display()
-        ))
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok && has(&py) {
-        Some(py)
-    } else {
-        eprintln!(
-            "bench/run parts: libigl not available (see {}); its columns read na",
-            log.display()
-        );
-        None
-    }
+    microfrep::io::pyvenv::python_with(&spec)
+        .map_err(|e| eprintln!("bench/run parts: libigl not available ({e}); its columns read na"))
+        .ok()
 }

@@ -31,34 +31,14 @@ fn root() -> PathBuf {
 
 /// The Python with PoreSpy, or why there is none.
 fn python() -> Result<PathBuf, String> {
-    if let Ok(p) = std::env::var("MICROFREP_PORESPY_PYTHON") {
-        return Ok(PathBuf::from(p));
-    }
-    let venv = root().join("target/porespy-venv");
-    let py = venv.join("bin/python");
-    let has = |py: &Path| {
-        Command::new(py)
-            .args(["-c", "import porespy"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if has(&py) {
-        return Ok(py);
-    }
-    eprintln!("installing PoreSpy into {}", venv.display());
-    let ok = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "python3 -m venv {v} && {v}/bin/pip install --quiet porespy",
-            v = venv.display()
-        ))
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok && has(&py) {
-        Ok(py)
-    } else {
-        Err("python3 -m venv / pip install porespy failed".into())
-    }
+    let dir = root().join("target");
+    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_PORESPY_PYTHON",
+        venv: &dir.join("porespy-venv"),
+        check: "import porespy",
+        packages: &["porespy"],
+        log: &dir.join("porespy-install.log"),
+    })
 }
 
 /// Diameters (voxels) from PoreSpy for `phase` of `labels`, and its porosity.

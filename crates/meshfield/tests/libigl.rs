@@ -28,34 +28,14 @@ fn root() -> PathBuf {
 
 /// The Python with libigl, or why there is none.
 fn python() -> Result<PathBuf, String> {
-    if let Ok(p) = std::env::var("MICROFREP_LIBIGL_PYTHON") {
-        return Ok(PathBuf::from(p));
-    }
-    let venv = root().join("target/libigl-venv");
-    let py = venv.join("bin/python");
-    let has = |py: &Path| {
-        Command::new(py)
-            .args(["-c", "import igl, numpy"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if has(&py) {
-        return Ok(py);
-    }
-    eprintln!("installing libigl into {}", venv.display());
-    let ok = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "python3 -m venv {v} && {v}/bin/pip install --quiet libigl numpy",
-            v = venv.display()
-        ))
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok && has(&py) {
-        Ok(py)
-    } else {
-        Err("python3 -m venv / pip install libigl numpy failed".into())
-    }
+    let dir = root().join("target");
+    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_LIBIGL_PYTHON",
+        venv: &dir.join("libigl-venv"),
+        check: "import igl, numpy",
+        packages: &["libigl", "numpy"],
+        log: &dir.join("libigl-install.log"),
+    })
 }
 
 fn write_f64(path: &Path, rows: &[[f64; 3]]) {
