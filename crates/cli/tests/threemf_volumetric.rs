@@ -241,7 +241,7 @@ fn lib3mf_reads(files: &[&Path]) {
             assert_eq!(seen, Some(mappings.map_or(-1, |n| n as i64)), "{text}");
         } else if mappings.is_some() {
             eprintln!(
-                "lib3mf {} does not implement volumetric composites: composite not compared",
+                "{}: lib3mf does not implement volumetric composites, composite not compared",
                 f.display()
             );
         }
@@ -334,6 +334,7 @@ fn implicit_graph_and_attribute_stacks_read_back_like_the_model() {
         }
         assert!(spread.1 - spread.0 > 0.5, "a graded channel: {spread:?}");
     }
+    xsd_valid(&[&out]);
     lib3mf_reads(&[&out]);
 }
 
@@ -509,6 +510,7 @@ fn a_mesh_field_falls_back_to_an_image_stack_and_says_so() {
     let m = microfrep::threemf::read_file(&fill).unwrap();
     microfrep::threemf::validate(&m).unwrap();
     level_set(&m);
+    xsd_valid(&[&out, &fill]);
     lib3mf_reads(&[&out, &fill]);
 }
 
