@@ -400,6 +400,10 @@ fn lib3mf_reads_the_volumetric_sample() {
     // implement volumetric composites (warning on the composite and each
     // mapping, then dropping them). Nothing else may be warned about; once
     // lib3mf reads composites, it must see ours.
+    assert!(
+        text.lines().any(|l| l == "image 3 4 2"),
+        "rows, columns, sheets: {text}"
+    );
     let per = get("selfwarnings");
     assert!(per == 0 || per == 2, "{text}");
     let support = get("compositesupport") == 1;
@@ -410,4 +414,75 @@ fn lib3mf_reads_the_volumetric_sample() {
     } else {
         assert_eq!(get("composite"), -1, "{text}");
     }
+}
+
+#[test]
+fn a_volumetric_file_written_by_lib3mf_reads_here() {
+    if std::env::var("MICROFREP_LIB3MF").as_deref() != Ok("1") {
+        eprintln!("skipped: set MICROFREP_LIB3MF=1 to cross-check with lib3mf");
+        return;
+    }
+    let py = python("lib3mf");
+    let dir = root().join("../../target/3mf-lib3mf");
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("written-by-lib3mf.3mf");
+    let out = Command::new(&py)
+        .arg(root().join("tools/lib3mf_write_volumetric.py"))
+        .arg(&p)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "lib3mf could not write: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = read_file(&p).unwrap();
+    validate(&m).unwrap();
+    // The image stack: 2 columns (U), 3 rows (V), 2 sheets of constant grey
+    // 0 and 100.
+    assert_eq!(m.images.len(), 1);
+    let im = &m.images[0];
+    assert_eq!(im.dims, [2, 3, 2]);
+    assert_eq!(im.value(1, 2, 0, 0), 0.0);
+    assert!((im.value(0, 1, 1, 0) - 100.0 / 255.0).abs() < 1e-12);
+    let f = &m.image_functions[0];
+    assert_eq!(f.image, im.id);
+    assert_eq!(f.filter, Filter::Nearest);
+    assert_eq!(
+        f.tile,
+        [TileStyle::Clamp, TileStyle::Wrap, TileStyle::Mirror]
+    );
+    assert_eq!((f.value_offset, f.value_scale), (0.5, 2.0));
+    // Volume data on the cube and the level set: colour and one property.
+    let vd = &m.volume_data[0];
+    assert_eq!(vd.color.as_ref().map(|c| c.channel.as_str()), Some("color"));
+    assert_eq!(vd.properties.len(), 1);
+    assert_eq!(vd.properties[0].name, "density");
+    assert_eq!(vd.properties[0].value.channel, "red");
+    assert!(vd.composite.is_none());
+    let ls = m
+        .objects
+        .iter()
+        .find_map(|o| match &o.content {
+            ObjectContent::LevelSet(l) => Some(l),
+            _ => None,
+        })
+        .expect("a level set");
+    assert_eq!(ls.channel, "shape");
+    assert!(ls.mesh_bbox_only);
+    assert_eq!(ls.min_feature_size, 0.1);
+    assert_eq!(ls.volume_id, Some(vd.id));
+    // The implicit function is |pos|: evaluate it.
+    let g = m
+        .implicit_functions
+        .iter()
+        .find(|g| g.id == ls.function)
+        .unwrap();
+    let v = g
+        .eval(&[(
+            "pos",
+            microfrep_3mf::implicit::Value::Vector([3.0, 4.0, 12.0]),
+        )])
+        .unwrap();
+    assert_eq!(v[0].1, microfrep_3mf::implicit::Value::Scalar(13.0));
 }

@@ -6,6 +6,8 @@ content, one `key value` line each:
   functions, images   function (image and implicit) and image3d counts
   implicitnodes N     nodes over all implicit functions
   sheets N            image sheets over all image stacks
+  image ROWS COLUMNS SHEETS
+                      one line per image stack, in file order
   properties N        properties of the first level set's volume data
   color 0|1           whether that volume data has a colour
   composite N         its composite's material mappings (-1: none seen)
@@ -90,7 +92,10 @@ for f in functions:
     if isinstance(f, lib3mf.ImplicitFunction):
         nodes += items(f.GetNodes(), lambda it: 0).__len__()
 print("implicitnodes", nodes)
-print("sheets", sum(i.GetSheetCount() for i in images if isinstance(i, lib3mf.ImageStack)))
+stacks = [i for i in images if isinstance(i, lib3mf.ImageStack)]
+print("sheets", sum(i.GetSheetCount() for i in stacks))
+for i in stacks:
+    print("image", i.GetRowCount(), i.GetColumnCount(), i.GetSheetCount())
 props, color, composite = 0, 0, -1
 if levelsets:
     vd = levelsets[0].GetVolumeData()
