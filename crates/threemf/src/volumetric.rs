@@ -101,12 +101,8 @@ impl Image3D {
             for iy in 0..dims[1] {
                 for ix in 0..dims[0] {
                     let v = f(ix, iy, iz);
-                    for c in 0..nc {
-                        let x = if v[c].is_nan() {
-                            0.0
-                        } else {
-                            v[c].clamp(0.0, 1.0)
-                        };
+                    for &c in &v[..nc] {
+                        let x = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
                         samples.push((x * max).round() as u16);
                     }
                 }

@@ -752,9 +752,9 @@ fn slice_xml(s: &mut String, sl: &Slice) {
 }
 
 fn slicestack_xml(s: &mut String, st: &SliceStack) {
-    write!(
+    writeln!(
         s,
-        "<s:slicestack id=\"{}\" zbottom=\"{}\">\n",
+        "<s:slicestack id=\"{}\" zbottom=\"{}\">",
         st.id,
         Num(st.zbottom)
     )

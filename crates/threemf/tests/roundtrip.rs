@@ -351,7 +351,7 @@ fn volumetric_image_stack_and_composite_round_trip() {
 fn core_graph_as_implicit_function_evaluates_like_the_core() {
     use microfrep_core::{Expr, PointEval, Tape};
     let [x, y, z] = Expr::xyz();
-    let exprs = vec![
+    let exprs = [
         (x.square() + y.square() + z.square()).sqrt() - 1.0,
         (&x * 3.0).sin().max((&y * 2.0).cos()) - z.abs().min(0.5),
         Expr::select(x.lt(&y), x.tan().atan(), z.exp().ln() + y.powi(3)),
