@@ -101,11 +101,18 @@ fn voxels(m: &Model, r: &FunctionRef) -> Vec<([f64; 3], f64, f64)> {
     v
 }
 
+/// The Python of the 3MF cross-checks (created on first use, as in
+/// crates/threemf/tests/crosscheck.rs); a requested check without it fails.
 fn python() -> PathBuf {
-    std::env::var("MICROFREP_3MF_PYTHON").map_or_else(
-        |_| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/3mf-venv/bin/python"),
-        PathBuf::from,
-    )
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target");
+    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_3MF_PYTHON",
+        venv: &dir.join("3mf-venv"),
+        check: "import xmlschema, lib3mf",
+        packages: &["xmlschema", "lib3mf"],
+        log: &dir.join("3mf-install.log"),
+    })
+    .unwrap_or_else(|e| panic!("requested, but no Python for the 3MF checks: {e}"))
 }
 
 /// With `MICROFREP_3MF_VALIDATE=1`, the files' model parts validate against

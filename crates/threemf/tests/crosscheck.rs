@@ -18,34 +18,18 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
 }
 
+/// The Python with xmlschema and lib3mf (`module` is the one the caller
+/// needs); a requested check that cannot get it fails.
 fn python(module: &str) -> PathBuf {
-    if let Ok(p) = std::env::var("MICROFREP_3MF_PYTHON") {
-        return PathBuf::from(p);
-    }
-    let venv = root().join("../../target/3mf-venv");
-    let py = venv.join("bin/python");
-    let has = |py: &Path| {
-        Command::new(py)
-            .args(["-c", &format!("import {module}")])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if !has(&py) {
-        eprintln!("installing xmlschema and lib3mf into {}", venv.display());
-        let ok = Command::new("sh")
-            .arg("-c")
-            .arg(format!(
-                "python3 -m venv {v} && {v}/bin/pip install --quiet xmlschema lib3mf",
-                v = venv.display()
-            ))
-            .status()
-            .is_ok_and(|s| s.success());
-        assert!(
-            ok && has(&py),
-            "requested, but python3 -m venv / pip install failed"
-        );
-    }
-    py
+    let dir = root().join("../../target");
+    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_3MF_PYTHON",
+        venv: &dir.join("3mf-venv"),
+        check: "import xmlschema, lib3mf",
+        packages: &["xmlschema", "lib3mf"],
+        log: &dir.join("3mf-install.log"),
+    })
+    .unwrap_or_else(|e| panic!("requested, but no Python with {module}: {e}"))
 }
 
 fn cube(s: f64) -> Mesh {
