@@ -338,8 +338,8 @@ fn unary(
         Sign => lane!(|v: f32| t(v > 0.0) - t(v < 0.0)),
         Sqrt => lane!(f32::sqrt),
         Square => lane!(|v: f32| v * v),
-        Exp => lane!(f32::exp),
-        Ln => lane!(f32::ln),
+        Exp => lane!(|v| simd_math::exp(v)),
+        Ln => lane!(|v| simd_math::ln(v)),
         Sin => lane!(simd_math::sin),
         Cos => lane!(simd_math::cos),
         Tan => lane!(f32::tan),
@@ -370,7 +370,7 @@ fn binary(op: BinaryOp, o: &mut Lanes, a: impl Src, b: impl Src) {
         Sub => map2(o, a, b, |x, y| x - y),
         Mul => map2(o, a, b, |x, y| x * y),
         Div => map2(o, a, b, |x, y| x / y),
-        Pow => map2(o, a, b, f32::powf),
+        Pow => map2(o, a, b, |x, y| simd_math::pow(x, y)),
         Atan2 => map2(o, a, b, f32::atan2),
         // NaN-propagating like the reference (ops::fmin/fmax).
         Min => map2(o, a, b, |x, y| {
