@@ -170,10 +170,10 @@ impl Band<'_> {
     fn tile(&self, ev: &mut Evals, rows: &mut [u8], at: [usize; 2], size: [usize; 2], close: bool) {
         let (grid, layer) = (self.grid, self.layer);
         let cols = at[0]..at[0] + size[0];
-        let inside = (at[1]..at[1] + size[1])
-            .map(|j| cols.clone().filter(|&i| layer.inside(i, j)).count())
-            .sum::<usize>();
-        if inside == 0 {
+        // Stops at the first inside pixel (most tiles of a solid's interior
+        // have one at their corner), so tiles are not counted at every level.
+        let any_inside = (at[1]..at[1] + size[1]).any(|j| cols.clone().any(|i| layer.inside(i, j)));
+        if !any_inside {
             return;
         }
         let big = size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE;
