@@ -39,8 +39,10 @@ const SIMPLIFY_TILE: usize = 32;
 
 /// Tiles below [`SIMPLIFY_TILE`] are bounded only when their parent's
 /// bounds spanned at most this many grey levels (else bounding them rarely
-/// pays: smooth channels vary by many levels over a tile).
-const CLOSE_LEVELS: u8 = 8;
+/// pays: smooth channels vary by many levels over a tile, and a child spans
+/// about half its parent's levels, so it is uniform only when the parent
+/// spanned very few; with 8 the Bezier cube's leaves were bounded in vain).
+const CLOSE_LEVELS: u8 = 2;
 
 /// Grey level of attribute value `s`: `round(255 clamp(s, 0, 1))`.
 fn grey(s: f32) -> u8 {

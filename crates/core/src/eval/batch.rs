@@ -25,7 +25,8 @@ type Lanes = [f32; BLOCK];
 /// Agreement with the f64 reference at the same f32 input (tested in
 /// `tests/batch.rs`): per op `|batch - point| <= 1e-6 |point| + 5e-7` away from
 /// the jumps of discontinuous ops (sin/cos use the polynomial of `simd_math`,
-/// absolute error < 5e-7 for |x| < 1e4); for graphs of up to 16 ops with
+/// absolute error < 5e-7 for |x| < 1e4; exp, ln and pow its kernels within
+/// 1 ulp, `tests/simd_math.rs`); for graphs of up to 16 ops with
 /// Lipschitz constants near 1 and values in [-1, 1], `<= 2e-6`.
 pub struct BatchEval {
     tape: Tape,
