@@ -319,6 +319,9 @@ fn t(b: bool) -> f32 {
 
 /// `post(op(pre(v)))` over a block: `pre` and `post` are the identity or
 /// the immediate op of a fused [`Step::Pair`].
+// The exp/ln/pow kernels go in as closures: passed as fn items they were
+// called per lane through a shim that was not inlined (scalar code, 3x slower).
+#[allow(clippy::redundant_closure)]
 #[inline(always)]
 fn unary(
     op: UnaryOp,
@@ -364,6 +367,9 @@ fn unary(
     }
 }
 
+// The exp/ln/pow kernels go in as closures: passed as fn items they were
+// called per lane through a shim that was not inlined (scalar code, 3x slower).
+#[allow(clippy::redundant_closure)]
 fn binary(op: BinaryOp, o: &mut Lanes, a: impl Src, b: impl Src) {
     use BinaryOp::*;
     match op {
