@@ -39,8 +39,10 @@ const SIMPLIFY_TILE: usize = 32;
 
 /// Tiles below [`SIMPLIFY_TILE`] are bounded only when their parent's
 /// bounds spanned at most this many grey levels (else bounding them rarely
-/// pays: smooth channels vary by many levels over a tile).
-const CLOSE_LEVELS: u8 = 8;
+/// pays: smooth channels vary by many levels over a tile, and a child spans
+/// about half its parent's levels, so it is uniform only when the parent
+/// spanned very few; with 8 the Bezier cube's leaves were bounded in vain).
+const CLOSE_LEVELS: u8 = 2;
 
 /// Grey level of attribute value `s`: `round(255 clamp(s, 0, 1))`.
 fn grey(s: f32) -> u8 {
@@ -170,10 +172,10 @@ impl Band<'_> {
     fn tile(&self, ev: &mut Evals, rows: &mut [u8], at: [usize; 2], size: [usize; 2], close: bool) {
         let (grid, layer) = (self.grid, self.layer);
         let cols = at[0]..at[0] + size[0];
-        let inside = (at[1]..at[1] + size[1])
-            .map(|j| cols.clone().filter(|&i| layer.inside(i, j)).count())
-            .sum::<usize>();
-        if inside == 0 {
+        // Stops at the first inside pixel (most tiles of a solid's interior
+        // have one at their corner), so tiles are not counted at every level.
+        let any_inside = (at[1]..at[1] + size[1]).any(|j| cols.clone().any(|i| layer.inside(i, j)));
+        if !any_inside {
             return;
         }
         let big = size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE;

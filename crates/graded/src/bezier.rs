@@ -245,7 +245,9 @@ fn subdivide(c: &mut [f64], a: f64, b: f64) {
     }
     // Left part on [0, b]: after the loop work[i] is the first element of
     // de Casteljau level i at t = b.
-    let mut work = c.to_vec();
+    let mut buf = [0.0; MAX_DEGREE + 1];
+    let work = &mut buf[..=n];
+    work.copy_from_slice(c);
     if b < 1.0 {
         for level in 1..=n {
             for i in (level..=n).rev() {
@@ -263,7 +265,7 @@ fn subdivide(c: &mut [f64], a: f64, b: f64) {
             }
         }
     }
-    c.copy_from_slice(&work);
+    c.copy_from_slice(work);
 }
 
 /// Range of the net `w` (degrees `deg`) over the unit sub-box `u[a]`.
@@ -272,8 +274,14 @@ fn net_range(w: &[f64], deg: [usize; 3], u: [(f64, f64); 3]) -> (f64, f64) {
         return range_of(w);
     }
     let mut net = w.to_vec();
-    let dims = deg.map(|d| d + 1);
-    for axis in 0..3 {
+    let mut dims = deg.map(|d| d + 1);
+    // Axes of zero width (a slice's fixed z) first: their subdivision makes
+    // every line along them constant (each step `0 * w_i + 1 * w_{i+1}` is
+    // exact), so one slice across them holds all values and the other axes
+    // subdivide only that slice.
+    let mut order = [0, 1, 2];
+    order.sort_by_key(|&a| u[a].0 != u[a].1);
+    for axis in order {
         let (a, b) = u[axis];
         if a == 0.0 && b == 1.0 {
             continue;
@@ -284,7 +292,8 @@ fn net_range(w: &[f64], deg: [usize; 3], u: [(f64, f64); 3]) -> (f64, f64) {
             _ => dims[0] * dims[1],
         };
         let n = dims[axis];
-        let mut line = vec![0.0; n];
+        let mut line = [0.0; MAX_DEGREE + 1];
+        let line = &mut line[..n];
         for base in 0..net.len() {
             if (base / stride) % n != 0 {
                 continue;
@@ -292,10 +301,21 @@ fn net_range(w: &[f64], deg: [usize; 3], u: [(f64, f64); 3]) -> (f64, f64) {
             for (t, l) in line.iter_mut().enumerate() {
                 *l = net[base + t * stride];
             }
-            subdivide(&mut line, a, b);
+            subdivide(line, a, b);
             for (t, l) in line.iter().enumerate() {
                 net[base + t * stride] = *l;
             }
+        }
+        if a == b && n > 1 && net.iter().all(|v| v.is_finite()) {
+            // Keep the slice at index 0 along this axis.
+            let mut kept = Vec::with_capacity(net.len() / n);
+            for (idx, &v) in net.iter().enumerate() {
+                if (idx / stride) % n == 0 {
+                    kept.push(v);
+                }
+            }
+            net = kept;
+            dims[axis] = 1;
         }
     }
     range_of(&net)
@@ -441,24 +461,28 @@ impl BezierBox {
             }
         }
         let [l, m, n] = self.deg;
-        let (mut val, mut g) = (0.0, [0.0; 3]);
-        for k in 0..=n {
-            let (mut s, mut sx, mut sy) = (0.0, 0.0, 0.0);
-            for j in 0..=m {
-                let row = &self.w[(l + 1) * (j + (m + 1) * k)..][..=l];
-                let r: f64 = row.iter().zip(&b[0][..=l]).map(|(w, b)| w * b).sum();
-                s += b[1][j] * r;
-                if want_grad {
-                    let rx: f64 = row.iter().zip(&db[0][..=l]).map(|(w, b)| w * b).sum();
-                    sx += b[1][j] * rx;
-                    sy += db[1][j] * r;
-                }
+        // The value as the batch evaluation computes it (see `row_coeffs`).
+        let mut c = [0.0; MAX_DEGREE + 1];
+        self.row_coeffs(&b[1], &b[2], &mut c);
+        let mut val = -0.0;
+        for i in 0..=l {
+            val += b[0][i] * c[i];
+        }
+        let mut g = [0.0; 3];
+        if want_grad {
+            for i in 0..=l {
+                g[0] += db[0][i] * c[i];
             }
-            val += b[2][k] * s;
-            if want_grad {
-                g[0] += b[2][k] * sx;
+            for k in 0..=n {
+                let (mut sy, mut sz) = (0.0, 0.0);
+                for j in 0..=m {
+                    let row = &self.w[(l + 1) * (j + (m + 1) * k)..][..=l];
+                    let r: f64 = row.iter().zip(&b[0][..=l]).map(|(w, b)| w * b).sum();
+                    sy += db[1][j] * r;
+                    sz += b[1][j] * r;
+                }
                 g[1] += b[2][k] * sy;
-                g[2] += db[2][k] * s;
+                g[2] += db[2][k] * sz;
             }
         }
         for a in 0..3 {
@@ -467,6 +491,27 @@ impl BezierBox {
             }
         }
         (val, g)
+    }
+
+    /// The polynomial's coefficients along x for fixed y and z: `c[i] =
+    /// sum_k B_k(w) sum_j B_j(v) w_ijk` from the Bernstein values `by`, `bz`,
+    /// so the value is `sum_i B_i(u) c[i]`. A row of points with the same y
+    /// and z shares them (one cubic in u per point instead of the whole
+    /// tensor sum); point and batch evaluation both sum in this order, so
+    /// they give the same bits.
+    fn row_coeffs(&self, by: &[f64], bz: &[f64], c: &mut [f64; MAX_DEGREE + 1]) {
+        let [l, m, n] = self.deg;
+        for (i, ci) in c.iter_mut().enumerate().take(l + 1) {
+            let mut acc = -0.0;
+            for k in 0..=n {
+                let mut t = -0.0;
+                for j in 0..=m {
+                    t += by[j] * self.w[i + (l + 1) * (j + (m + 1) * k)];
+                }
+                acc += bz[k] * t;
+            }
+            *ci = acc;
+        }
     }
 
     /// Unit sub-box of `b` clamped into the domain, and per axis whether
@@ -533,37 +578,72 @@ impl Field for BezierBox {
 
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
         // Lanes of points through the same f64 operations in the same order
-        // as `value_grad`, so each result has the same bits as `eval`.
+        // as `value_grad`, so each result has the same bits as `eval`. Lanes
+        // that share y and z (rows of a slice or grid) share the
+        // coefficients along x, computed once per row.
         let [l, m, n] = self.deg;
+        let param = |a: usize, c: f32| {
+            ((c as f64 - self.min[a]) / (self.max[a] - self.min[a])).clamp(0.0, 1.0)
+        };
+        let mut row: Option<(u32, u32)> = None;
+        let mut shared = [0.0f64; MAX_DEGREE + 1];
         let mut q = 0;
         while q < out.len() {
             let len = LANES.min(out.len() - q);
-            let mut b = [[[0.0f64; LANES]; MAX_DEGREE + 1]; 3];
-            for (a, c) in [x, y, z].into_iter().enumerate() {
-                let side = self.max[a] - self.min[a];
-                let mut t = [0.0f64; LANES];
-                for (t, &c) in t.iter_mut().zip(&c[q..q + len]) {
-                    *t = ((c as f64 - self.min[a]) / side).clamp(0.0, 1.0);
-                }
-                bernstein_lanes(self.deg[a], &t, &mut b[a]);
+            let (ys, zs) = (&y[q..q + len], &z[q..q + len]);
+            let mut t = [0.0f64; LANES];
+            for (t, &c) in t.iter_mut().zip(&x[q..q + len]) {
+                *t = param(0, c);
             }
-            let mut val = [0.0f64; LANES];
-            for k in 0..=n {
-                let mut s = [0.0f64; LANES];
-                for j in 0..=m {
-                    let row = &self.w[(l + 1) * (j + (m + 1) * k)..][..=l];
-                    let mut r = [-0.0f64; LANES];
-                    for (w, bi) in row.iter().zip(&b[0]) {
+            let mut b0 = [[0.0f64; LANES]; MAX_DEGREE + 1];
+            bernstein_lanes(l, &t, &mut b0);
+            let key = (ys[0].to_bits(), zs[0].to_bits());
+            let same =
+                ys.iter().all(|v| v.to_bits() == key.0) && zs.iter().all(|v| v.to_bits() == key.1);
+            let mut c = [[0.0f64; LANES]; MAX_DEGREE + 1];
+            if same {
+                if row != Some(key) {
+                    let mut by = [0.0; MAX_DEGREE + 1];
+                    let mut bz = [0.0; MAX_DEGREE + 1];
+                    bernstein(m, param(1, ys[0]), &mut by, None);
+                    bernstein(n, param(2, zs[0]), &mut bz, None);
+                    self.row_coeffs(&by, &bz, &mut shared);
+                    row = Some(key);
+                }
+                for (c, &s) in c.iter_mut().zip(&shared).take(l + 1) {
+                    *c = [s; LANES];
+                }
+            } else {
+                let mut by = [[0.0f64; LANES]; MAX_DEGREE + 1];
+                let mut bz = [[0.0f64; LANES]; MAX_DEGREE + 1];
+                for (a, cs, bs) in [(1, ys, &mut by), (2, zs, &mut bz)] {
+                    let mut t = [0.0f64; LANES];
+                    for (t, &c) in t.iter_mut().zip(cs) {
+                        *t = param(a, c);
+                    }
+                    bernstein_lanes(self.deg[a], &t, bs);
+                }
+                for (i, ci) in c.iter_mut().enumerate().take(l + 1) {
+                    let mut acc = [-0.0f64; LANES];
+                    for k in 0..=n {
+                        let mut s = [-0.0f64; LANES];
+                        for j in 0..=m {
+                            let w = self.w[i + (l + 1) * (j + (m + 1) * k)];
+                            for e in 0..LANES {
+                                s[e] += by[j][e] * w;
+                            }
+                        }
                         for e in 0..LANES {
-                            r[e] += w * bi[e];
+                            acc[e] += bz[k][e] * s[e];
                         }
                     }
-                    for e in 0..LANES {
-                        s[e] += b[1][j][e] * r[e];
-                    }
+                    *ci = acc;
                 }
+            }
+            let mut val = [-0.0f64; LANES];
+            for i in 0..=l {
                 for e in 0..LANES {
-                    val[e] += b[2][k][e] * s[e];
+                    val[e] += b0[i][e] * c[i][e];
                 }
             }
             for (o, v) in out[q..q + len].iter_mut().zip(val) {
@@ -855,6 +935,101 @@ impl Field for BezierTet {
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
         for i in 0..out.len() {
             out[i] = self.eval([x[i] as f64, y[i] as f64, z[i] as f64]) as f32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BezierBox;
+    use microfrep_core::Field;
+
+    /// Rows of a grid (lanes sharing y and z, the path that reuses the
+    /// coefficients along x), rows that change inside a group of lanes, and
+    /// points outside the box or at NaN: every result has the bits of the
+    /// point evaluation rounded to f32.
+    #[test]
+    fn shared_rows_have_point_bits() {
+        let deg = [3, 2, 4];
+        let count = (deg[0] + 1) * (deg[1] + 1) * (deg[2] + 1);
+        let w: Vec<f64> = (0..count)
+            .map(|i| ((i * 29 % 13) as f64 - 6.0) / 5.0)
+            .collect();
+        let f = BezierBox::new("b", [-1.0, 0.0, 0.5], [1.0, 2.0, 1.5], deg, w).unwrap();
+        let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
+        // Rows of 13 points (not a multiple of the lane count), y and z
+        // stepping inside and beyond the box.
+        for r in 0..40 {
+            for i in 0..13 {
+                xs.push(-1.3 + 0.2 * i as f32);
+                ys.push(-0.2 + 0.06 * r as f32);
+                zs.push(0.4 + 0.03 * (r / 3) as f32);
+            }
+        }
+        ys[100] = f32::NAN;
+        zs[200] = f32::NAN;
+        xs[300] = f32::NAN;
+        for len in [8usize, 13, 16, 100, xs.len()] {
+            let mut out = vec![0f32; len];
+            f.eval_batch(&xs[..len], &ys[..len], &zs[..len], &mut out);
+            for i in 0..len {
+                let want = f.eval([xs[i] as f64, ys[i] as f64, zs[i] as f64]) as f32;
+                assert!(
+                    out[i].to_bits() == want.to_bits() || (out[i].is_nan() && want.is_nan()),
+                    "point {i} of {len}: {} vs {want}",
+                    out[i]
+                );
+            }
+        }
+        let mut out = vec![0f32; xs.len()];
+        f.eval_batch(&xs, &ys, &zs, &mut out);
+        assert!(out[100].is_nan() && out[200].is_nan() && out[300].is_nan());
+        assert!(out[..100].iter().all(|v| v.is_finite()));
+    }
+
+    /// Interval bounds over boxes flat along one or two axes (a slice's
+    /// fixed z, the path that keeps one slice of the net) contain the
+    /// values at points of the box, and are tight: the flat box's bounds
+    /// are no wider than the full box's.
+    #[test]
+    fn flat_boxes_bound_their_values() {
+        use microfrep_core::Interval;
+        let deg = [3, 2, 4];
+        let count = (deg[0] + 1) * (deg[1] + 1) * (deg[2] + 1);
+        let w: Vec<f64> = (0..count)
+            .map(|i| ((i * 29 % 13) as f64 - 6.0) / 5.0)
+            .collect();
+        let f = BezierBox::new("b", [-1.0, 0.0, 0.5], [1.0, 2.0, 1.5], deg, w).unwrap();
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f64 / (1u64 << 24) as f64
+        };
+        for case in 0..300 {
+            let lo = [-1.2 + 2.2 * next(), -0.2 + 2.2 * next(), 0.4 + 1.2 * next()];
+            let wide = [0.5 * next(), 0.5 * next(), 0.5 * next()];
+            let mut b = [Interval::point(0.0); 3];
+            for a in 0..3 {
+                // Flat along z always, along y in every third case.
+                let flat = a == 2 || (a == 1 && case % 3 == 0);
+                b[a] = Interval::new(lo[a], lo[a] + if flat { 0.0 } else { wide[a] });
+            }
+            let iv = f.interval(b);
+            let full = f.interval([b[0], b[1], Interval::new(lo[2] - 0.1, lo[2] + 0.1)]);
+            assert!(
+                iv.lo >= full.lo - 1e-12 && iv.hi <= full.hi + 1e-12,
+                "{iv:?} vs {full:?}"
+            );
+            for _ in 0..50 {
+                let p: [f64; 3] = std::array::from_fn(|a| b[a].lo + (b[a].hi - b[a].lo) * next());
+                let v = f.eval(p);
+                assert!(
+                    iv.lo <= v && v <= iv.hi,
+                    "case {case}: {v} outside {iv:?} at {p:?}"
+                );
+            }
         }
     }
 }

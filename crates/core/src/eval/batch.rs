@@ -25,7 +25,8 @@ type Lanes = [f32; BLOCK];
 /// Agreement with the f64 reference at the same f32 input (tested in
 /// `tests/batch.rs`): per op `|batch - point| <= 1e-6 |point| + 5e-7` away from
 /// the jumps of discontinuous ops (sin/cos use the polynomial of `simd_math`,
-/// absolute error < 5e-7 for |x| < 1e4); for graphs of up to 16 ops with
+/// absolute error < 5e-7 for |x| < 1e4; exp, ln and pow its kernels within
+/// 1 ulp, `tests/simd_math.rs`); for graphs of up to 16 ops with
 /// Lipschitz constants near 1 and values in [-1, 1], `<= 2e-6`.
 pub struct BatchEval {
     tape: Tape,
@@ -318,6 +319,9 @@ fn t(b: bool) -> f32 {
 
 /// `post(op(pre(v)))` over a block: `pre` and `post` are the identity or
 /// the immediate op of a fused [`Step::Pair`].
+// The exp/ln/pow kernels go in as closures: passed as fn items they were
+// called per lane through a shim that was not inlined (scalar code, 3x slower).
+#[allow(clippy::redundant_closure)]
 #[inline(always)]
 fn unary(
     op: UnaryOp,
@@ -338,8 +342,8 @@ fn unary(
         Sign => lane!(|v: f32| t(v > 0.0) - t(v < 0.0)),
         Sqrt => lane!(f32::sqrt),
         Square => lane!(|v: f32| v * v),
-        Exp => lane!(f32::exp),
-        Ln => lane!(f32::ln),
+        Exp => lane!(|v| simd_math::exp(v)),
+        Ln => lane!(|v| simd_math::ln(v)),
         Sin => lane!(simd_math::sin),
         Cos => lane!(simd_math::cos),
         Tan => lane!(f32::tan),
@@ -363,6 +367,9 @@ fn unary(
     }
 }
 
+// The exp/ln/pow kernels go in as closures: passed as fn items they were
+// called per lane through a shim that was not inlined (scalar code, 3x slower).
+#[allow(clippy::redundant_closure)]
 fn binary(op: BinaryOp, o: &mut Lanes, a: impl Src, b: impl Src) {
     use BinaryOp::*;
     match op {
@@ -370,7 +377,7 @@ fn binary(op: BinaryOp, o: &mut Lanes, a: impl Src, b: impl Src) {
         Sub => map2(o, a, b, |x, y| x - y),
         Mul => map2(o, a, b, |x, y| x * y),
         Div => map2(o, a, b, |x, y| x / y),
-        Pow => map2(o, a, b, f32::powf),
+        Pow => map2(o, a, b, |x, y| simd_math::pow(x, y)),
         Atan2 => map2(o, a, b, f32::atan2),
         // NaN-propagating like the reference (ops::fmin/fmax).
         Min => map2(o, a, b, |x, y| {
