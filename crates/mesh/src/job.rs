@@ -17,12 +17,13 @@
 //! [`JobOptions::colour`] colours the vertices by an attribute channel
 //! (PLY, OBJ, 3MF; checked before meshing).
 
-use crate::check::summary;
 use crate::memory::{self, Estimate, GIB};
 use crate::sampled::{sampled_volume, SampledVolume};
 use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
 use crate::write::colour::{channel_tape, scale_of, vertex_colours, ColourBy, ColourScale};
-use crate::write::{check_colours, format_of, stream_mesh_coloured, write_uncommitted, MeshFormat};
+use crate::write::{
+    check_colours, format_of, stream_mesh_coloured, write_uncommitted_measured, MeshFormat,
+};
 use crate::{Grid, Mesh, MeshError, MeshOptions, Plan};
 use microfrep_core::{ErrorCensus, Shape};
 use std::path::Path;
@@ -213,38 +214,42 @@ pub fn mesh_to_file(
             None => None,
         };
         colour_scale = colours.as_ref().map(|c| c.scale);
-        // The mesh is checked while it is written (the edge check is as
-        // costly as the encoding); the file is put in place only if the
-        // verdict passes, else dropping it removes it.
-        let (r, file) = rayon::join(
-            || summary(&mesh),
-            || {
-                write(
+        // The edge census (as costly as the encoding) runs while the file
+        // is encoded, checked by the verdict and synced; the file is put in
+        // place only if the verdict passes, else dropping it removes it.
+        // The verdict needs the volume: STL measures it while encoding
+        // (the facet normals are the same products), other formats take a
+        // pass over the triangles first.
+        let bbox = crate::check::bbox(&mesh);
+        let measured = (!format.measures_volume()).then(|| crate::check::volume_area(&mesh));
+        let ((edges, bad_edges), written) = rayon::join(
+            || crate::check::edges(&mesh),
+            || -> Result<Tally, MeshError> {
+                let (file, m) = write(
                     format,
                     out,
                     &plan,
                     &mesh,
                     colours.as_ref().map(|c| &c.rgb[..]),
-                )
+                );
+                let (volume, area) = measured
+                    .or(m)
+                    .unwrap_or_else(|| crate::check::volume_area(&mesh));
+                let t = Tally {
+                    vertices: mesh.vertices.len() as u64,
+                    triangles: mesh.triangles.len() as u64,
+                    volume,
+                    area,
+                    bbox,
+                };
+                verdict(&t)?;
+                file?.commit()?;
+                Ok(t)
             },
         );
-        let t = Tally {
-            vertices: r.vertices as u64,
-            triangles: r.triangles as u64,
-            volume: r.volume,
-            area: r.area,
-            bbox: r.bbox,
-        };
-        verdict(&t)?;
-        file?.commit()?;
-        summary_of(
-            &opts,
-            &plan,
-            &t,
-            Some((r.bad_edges, r.euler)),
-            predicted,
-            false,
-        )
+        let t = written?;
+        let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
+        summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
     };
     s.thin_cells = plan.thin_cells();
     s.runtime_errors = error_census(shape, &plan);
@@ -255,15 +260,24 @@ pub fn mesh_to_file(
     Ok(s)
 }
 
+/// Writes the mesh uncommitted; the volume and area where the format
+/// measured them while encoding. On a write error the volume is still
+/// wanted (the verdict's error comes first), hence the pair.
 fn write(
     format: &dyn MeshFormat,
     out: &Path,
     plan: &Plan,
     mesh: &Mesh,
     colours: Option<&[[u8; 3]]>,
-) -> Result<microfrep_io::AtomicFile, MeshError> {
+) -> (
+    Result<microfrep_io::AtomicFile, MeshError>,
+    Option<(f64, f64)>,
+) {
     let normals = format.wants_normals().then(|| plan.normals(mesh));
-    write_uncommitted(out, mesh, normals.as_deref(), colours)
+    match write_uncommitted_measured(out, mesh, normals.as_deref(), colours) {
+        Ok((f, m)) => (Ok(f), m),
+        Err(e) => (Err(e), None),
+    }
 }
 
 fn summary_of(
