@@ -214,40 +214,41 @@ pub fn mesh_to_file(
             None => None,
         };
         colour_scale = colours.as_ref().map(|c| c.scale);
-        // The edge census (as costly as the encoding) runs while the file
-        // is encoded, checked by the verdict and synced; the file is put in
-        // place only if the verdict passes, else dropping it removes it.
-        // The verdict needs the volume: STL measures it while encoding
-        // (the facet normals are the same products), other formats take a
-        // pass over the triangles first.
+        // The file is encoded first (all threads), then synced and put in
+        // place, if the verdict passes, on a thread of its own (the sync
+        // waits on the disk) while the pool counts the edges; dropped, the
+        // file is removed. (Run side by side under `rayon::join`, the
+        // encoder's ordered writes waited behind stolen census work.) The
+        // verdict needs the volume: STL measures it while encoding (the
+        // facet normals are the same products), other formats take a pass
+        // over the triangles.
         let bbox = crate::check::bbox(&mesh);
         let measured = (!format.measures_volume()).then(|| crate::check::volume_area(&mesh));
-        let ((edges, bad_edges), written) = rayon::join(
-            || crate::check::edges(&mesh),
-            || -> Result<Tally, MeshError> {
-                let (file, m) = write(
-                    format,
-                    out,
-                    &plan,
-                    &mesh,
-                    colours.as_ref().map(|c| &c.rgb[..]),
-                );
-                let (volume, area) = measured
-                    .or(m)
-                    .unwrap_or_else(|| crate::check::volume_area(&mesh));
-                let t = Tally {
-                    vertices: mesh.vertices.len() as u64,
-                    triangles: mesh.triangles.len() as u64,
-                    volume,
-                    area,
-                    bbox,
-                };
-                verdict(&t)?;
-                file?.commit()?;
-                Ok(t)
-            },
+        let (file, m) = write(
+            format,
+            out,
+            &plan,
+            &mesh,
+            colours.as_ref().map(|c| &c.rgb[..]),
         );
-        let t = written?;
+        let (volume, area) = measured
+            .or(m)
+            .unwrap_or_else(|| crate::check::volume_area(&mesh));
+        let t = Tally {
+            vertices: mesh.vertices.len() as u64,
+            triangles: mesh.triangles.len() as u64,
+            volume,
+            area,
+            bbox,
+        };
+        verdict(&t)?;
+        let file = file?;
+        let (committed, (edges, bad_edges)) = std::thread::scope(|sc| {
+            let sync = sc.spawn(move || file.commit());
+            let e = crate::check::edges(&mesh);
+            (sync.join(), e)
+        });
+        committed.map_err(|_| MeshError::Internal("the file sync thread panicked".into()))??;
         let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
         summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
     };
