@@ -2,7 +2,9 @@
 //! n cells, marching cubes; marching tetrahedra timed alongside) and by
 //! fidget's Manifold Dual Contouring (octree depth d, 2^d cells), both on 2
 //! threads, with each mesh's size, bad edges and volume
-//! error (reference: 1.6378 by Monte Carlo, +- 0.0003).
+//! error (reference: 1.6378 by Monte Carlo, +- 0.0003); also meshing
+//! without the volume correction (`microfrep_nocorr_s`, and
+//! `correction_cost`, the time with it over the time without).
 
 use crate::to_fidget::translate;
 use fidget::jit::JitFunction;
@@ -68,6 +70,20 @@ pub fn run() -> Result<(), String> {
                 .map_err(|e| e.to_string())
         })?;
         let (ms, mc) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        // The same without the volume correction (its cost, for reference).
+        let nocorr_s = {
+            let mut o = opts.clone();
+            o.volume_correction = false;
+            let t = Instant::now();
+            let m = ours.install(|| {
+                Plan::new(&microfrep_core::Shape::from(&expr), &o)
+                    .and_then(|p| p.run(&|_| {}))
+                    .map_err(|e| e.to_string())
+            })?;
+            let s = t.elapsed().as_secs_f64();
+            drop(m);
+            s
+        };
 
         // fidget meshes its default region [-1, 1]^3, the block's bounds.
         let shape = Shape::<JitFunction>::new(&ctx, root).map_err(|e| e.to_string())?;
@@ -95,7 +111,8 @@ pub fn run() -> Result<(), String> {
             "RESULT toriball_{n} microfrep_s={ms:.3} fidget_s={fs:.3} ratio={:.1} \
              microfrep_cpu_s={mc:.2} fidget_cpu_s={fc:.2} cpu_ratio={:.1} microfrep_tris={} fidget_tris={} microfrep_bad_edges={} fidget_bad_edges={} \
              microfrep_vol_err={:.4} fidget_vol_err={:.4} fidget_depth={depth} \
-             cells=cubes microfrep_tets_s={tets_s:.3} tets_ratio={:.1}",
+             cells=cubes microfrep_tets_s={tets_s:.3} tets_ratio={:.1} \
+             microfrep_nocorr_s={nocorr_s:.3} correction_cost={:.2}",
             fs / ms,
             fc / mc,
             a.triangles,
@@ -105,6 +122,7 @@ pub fn run() -> Result<(), String> {
             (a.volume - VOLUME) / VOLUME,
             (b.volume.abs() - VOLUME) / VOLUME,
             fs / tets_s,
+            ms / nocorr_s,
         );
     }
     gyroid_sheet_job(&ours)

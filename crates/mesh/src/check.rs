@@ -54,7 +54,7 @@ fn p64(p: [f32; 3]) -> [f64; 3] {
 /// Volume and area of a mesh (divergence theorem; f64 sums in a fixed order).
 pub fn volume_area(mesh: &Mesh) -> (f64, f64) {
     mesh.triangles
-        .par_chunks(1 << 16)
+        .par_chunks(crate::write::CHUNK)
         .map(|ch| {
             let (mut v, mut a) = (0.0, 0.0);
             for t in ch {
@@ -80,82 +80,34 @@ pub fn volume_area(mesh: &Mesh) -> (f64, f64) {
 
 /// What a mesher's summary reports: counts, bad edges, Euler
 /// characteristic, volume, area and bounding box, in time linear in the
-/// mesh (no sorting), in parallel. Each vertex checks the edges to its
-/// higher-numbered neighbours from its own triangle fan: an edge is good
-/// when it is used once in each direction. Duplicate triangles show as bad
-/// edges; coincident vertices and degenerate triangles are not looked for
-/// (the mesher makes neither by construction; [`check`] counts them).
+/// mesh (no global sort), in parallel ([`edges`]). Duplicate triangles
+/// show as bad edges; coincident vertices and degenerate triangles are not
+/// looked for (the mesher makes neither by construction; [`check`] counts
+/// them).
 pub fn summary(mesh: &Mesh) -> CheckReport {
     let nv = mesh.vertices.len();
     let (volume, area) = volume_area(mesh);
-    // Triangle fans by counting sort: offsets, then incident corners
-    // packed as triangle * 4 + corner.
-    let mut start = vec![0u32; nv + 1];
-    for t in &mesh.triangles {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
+    let (edges, bad_edges) = edges(mesh);
+    let bbox = bbox(mesh);
+    CheckReport {
+        vertices: nv,
+        triangles: mesh.triangles.len(),
+        edges,
+        bad_edges,
+        degenerate: 0,
+        duplicate_triangles: 0,
+        duplicate_vertices: 0,
+        euler: nv as i64 - edges as i64 + mesh.triangles.len() as i64,
+        volume,
+        area,
+        bbox,
     }
-    for i in 0..nv {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut inc = vec![0u64; 3 * mesh.triangles.len()];
-    for (ti, t) in mesh.triangles.iter().enumerate() {
-        for (k, &v) in t.iter().enumerate() {
-            let s = &mut fill[v as usize];
-            inc[*s as usize] = (ti as u64) << 2 | k as u64;
-            *s += 1;
-        }
-    }
-    drop(fill);
-    let (edges, bad_edges) = (0..nv)
-        .into_par_iter()
-        .with_min_len(4096)
-        .fold(
-            || (0usize, 0usize, Vec::<(u32, i8)>::new()),
-            |(mut e, mut b, mut nb), v| {
-                nb.clear();
-                for &c in &inc[start[v] as usize..start[v + 1] as usize] {
-                    let t = mesh.triangles[(c >> 2) as usize];
-                    let k = (c & 3) as usize;
-                    // v -> next is outgoing, prev -> v incoming.
-                    nb.push((t[(k + 1) % 3], 1));
-                    nb.push((t[(k + 2) % 3], -1));
-                }
-                nb.sort_unstable();
-                let mut i = 0;
-                while i < nb.len() {
-                    let w = nb[i].0;
-                    let mut j = i;
-                    let (mut outs, mut ins) = (0, 0);
-                    while j < nb.len() && nb[j].0 == w {
-                        if nb[j].1 > 0 {
-                            outs += 1;
-                        } else {
-                            ins += 1;
-                        }
-                        j += 1;
-                    }
-                    if w as usize > v {
-                        e += 1;
-                        if outs != 1 || ins != 1 {
-                            b += 1;
-                        }
-                    } else if w as usize == v {
-                        // A triangle with a repeated corner.
-                        e += 1;
-                        b += 1;
-                    }
-                    i = j;
-                }
-                (e, b, nb)
-            },
-        )
-        .map(|(e, b, _)| (e, b))
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-    let bbox = mesh
-        .vertices
+}
+
+/// Bounding box of the vertices (min, max; infinite the wrong way round
+/// when there are none).
+pub fn bbox(mesh: &Mesh) -> [[f64; 3]; 2] {
+    mesh.vertices
         .par_chunks(1 << 16)
         .map(|ch| {
             let mut bb = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
@@ -175,20 +127,161 @@ pub fn summary(mesh: &Mesh) -> CheckReport {
                     std::array::from_fn(|k| a[1][k].max(b[1][k])),
                 ]
             },
-        );
-    CheckReport {
-        vertices: nv,
-        triangles: mesh.triangles.len(),
-        edges,
-        bad_edges,
-        degenerate: 0,
-        duplicate_triangles: 0,
-        duplicate_vertices: 0,
-        euler: nv as i64 - edges as i64 + mesh.triangles.len() as i64,
-        volume,
-        area,
-        bbox,
+        )
+}
+
+/// Triangles per chunk of the edge census.
+const EDGE_CHUNK: usize = 1 << 15;
+
+/// Undirected edges and bad edges of `mesh`: an edge `{a, b}` is good when
+/// `a -> b` and `b -> a` are each used by exactly one triangle; an edge
+/// from a vertex to itself (a triangle with a repeated corner) counts once
+/// per vertex, as a bad edge. Linear time, in parallel: every directed
+/// edge goes to the bucket of its lower-numbered end (vertices in ranges,
+/// one parallel scatter into contiguous per-range regions), then each
+/// range is sorted by its lower end by counting and each vertex's few
+/// edges are grouped by the other end.
+///
+/// # Panics
+/// When a triangle refers to a vertex that does not exist.
+pub fn edges(mesh: &Mesh) -> (usize, usize) {
+    let nv = mesh.vertices.len();
+    if mesh.triangles.is_empty() {
+        return (0, 0);
     }
+    // Ranges of 2^shift vertices, about 256 of them (at least 4096 each).
+    let shift = (nv.max(1).div_ceil(256).next_power_of_two().trailing_zeros()).max(12);
+    let ranges = (nv >> shift) + 1;
+    let low = |t: &[u32; 3], k: usize| t[k].min(t[(k + 1) % 3]);
+    // Per chunk of triangles, directed edges per range.
+    let counts: Vec<Vec<u32>> = mesh
+        .triangles
+        .par_chunks(EDGE_CHUNK)
+        .map(|ch| {
+            let mut c = vec![0u32; ranges];
+            for t in ch {
+                for k in 0..3 {
+                    let v = low(t, k) as usize;
+                    assert!(
+                        v < nv && t[k].max(t[(k + 1) % 3]) < nv as u32,
+                        "triangle refers to a vertex past {nv}"
+                    );
+                    c[v >> shift] += 1;
+                }
+            }
+            c
+        })
+        .collect();
+    // Range r's region holds its edges from chunk 0, then chunk 1, ...
+    let mut buf = vec![0u64; 3 * mesh.triangles.len()];
+    let mut slots: Vec<Vec<&mut [u64]>> = counts.iter().map(|_| Vec::new()).collect();
+    let mut regions: Vec<&mut [u64]> = Vec::with_capacity(ranges);
+    {
+        let mut rest = &mut buf[..];
+        for r in 0..ranges {
+            let len: usize = counts.iter().map(|c| c[r] as usize).sum();
+            let (region, tail) = rest.split_at_mut(len);
+            rest = tail;
+            regions.push(region);
+        }
+    }
+    // Split each region into its chunks' parts (the regions stay borrowed
+    // through the parts).
+    let mut bounds = Vec::with_capacity(ranges);
+    for (r, region) in regions.into_iter().enumerate() {
+        bounds.push(region.len());
+        let mut rest = region;
+        for (c, cnt) in counts.iter().enumerate() {
+            let (part, tail) = rest.split_at_mut(cnt[r] as usize);
+            rest = tail;
+            slots[c].push(part);
+        }
+    }
+    // Scatter: entry = (lower end - range start) << 33 | upper end << 1 |
+    // (1 when the edge runs from the lower end to the upper).
+    mesh.triangles
+        .par_chunks(EDGE_CHUNK)
+        .zip(slots.par_iter_mut())
+        .for_each(|(ch, parts)| {
+            let mut at = vec![0usize; ranges];
+            for t in ch {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    let (lo, hi) = (a.min(b) as u64, a.max(b) as u64);
+                    let r = (lo >> shift) as usize;
+                    let local = lo - ((r as u64) << shift);
+                    parts[r][at[r]] = local << 33 | hi << 1 | (a < b) as u64;
+                    at[r] += 1;
+                }
+            }
+        });
+    drop(slots);
+    // Per range: counting sort by lower end, then each vertex's edges.
+    let mut regions: Vec<&[u64]> = Vec::with_capacity(ranges);
+    let mut rest = &buf[..];
+    for len in bounds {
+        let (region, tail) = rest.split_at(len);
+        rest = tail;
+        regions.push(region);
+    }
+    let size = 1usize << shift;
+    regions
+        .par_iter()
+        .map_init(
+            || (Vec::<u32>::new(), Vec::<u64>::new()),
+            |(start, sorted), region| {
+                start.clear();
+                start.resize(size + 1, 0);
+                for &e in region.iter() {
+                    start[(e >> 33) as usize + 1] += 1;
+                }
+                for i in 0..size {
+                    start[i + 1] += start[i];
+                }
+                sorted.clear();
+                sorted.resize(region.len(), 0);
+                for &e in region.iter() {
+                    let s = &mut start[(e >> 33) as usize];
+                    sorted[*s as usize] = e;
+                    *s += 1;
+                }
+                // `start[i]` is now the end of vertex i's edges.
+                let (mut e, mut b) = (0usize, 0usize);
+                let mut from = 0usize;
+                for v in 0..size {
+                    let to = start[v] as usize;
+                    let fan = &mut sorted[from..to];
+                    from = to;
+                    if fan.is_empty() {
+                        continue;
+                    }
+                    fan.sort_unstable();
+                    let mut i = 0;
+                    while i < fan.len() {
+                        let hi = (fan[i] >> 1) & 0xffff_ffff;
+                        let mut j = i;
+                        let (mut ups, mut downs) = (0, 0);
+                        while j < fan.len() && (fan[j] >> 1) & 0xffff_ffff == hi {
+                            if fan[j] & 1 == 1 {
+                                ups += 1;
+                            } else {
+                                downs += 1;
+                            }
+                            j += 1;
+                        }
+                        e += 1;
+                        // A repeated corner (upper end = lower end) only
+                        // ever counts as `downs`: never good.
+                        if ups != 1 || downs != 1 {
+                            b += 1;
+                        }
+                        i = j;
+                    }
+                }
+                (e, b)
+            },
+        )
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
 /// The full check: [`summary`]'s figures plus degenerate and duplicate
@@ -334,6 +427,71 @@ mod tests {
                 "{m:?}"
             );
         }
+    }
+
+    /// Edges and bad edges by a map of directed-edge counts: the definition
+    /// [`edges`] implements (a self-loop is one bad edge).
+    fn edges_by_map(m: &Mesh) -> (usize, usize) {
+        let mut count = std::collections::BTreeMap::<(u32, u32), usize>::new();
+        for t in &m.triangles {
+            for k in 0..3 {
+                *count.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        let (mut e, mut b) = (0, 0);
+        let mut seen = std::collections::BTreeSet::new();
+        for &(a, c) in count.keys() {
+            let key = (a.min(c), a.max(c));
+            if !seen.insert(key) {
+                continue;
+            }
+            e += 1;
+            let n = |x, y| count.get(&(x, y)).copied().unwrap_or(0);
+            if a == c || n(key.0, key.1) != 1 || n(key.1, key.0) != 1 {
+                b += 1;
+            }
+        }
+        (e, b)
+    }
+
+    #[test]
+    fn edge_census_matches_the_definition_across_vertex_ranges() {
+        // 5000 tetrahedra with scrambled vertex numbers (20000 vertices:
+        // several ranges of the census, edges between them), some faces
+        // flipped, dropped, doubled or degenerate.
+        let n = 5000u32;
+        let nv = 4 * n;
+        let perm = |i: u32| ((i as u64 * 7919 + 13) % nv as u64) as u32;
+        let mut m = Mesh {
+            vertices: vec![[0.0; 3]; nv as usize],
+            triangles: Vec::new(),
+        };
+        for k in 0..n {
+            let v = |i: u32| perm(4 * k + i);
+            let mut faces = vec![
+                [v(0), v(2), v(1)],
+                [v(0), v(1), v(3)],
+                [v(0), v(3), v(2)],
+                [v(1), v(2), v(3)],
+            ];
+            match k % 7 {
+                1 => faces[3] = [v(1), v(3), v(2)],
+                2 => {
+                    faces.pop();
+                }
+                3 => faces.push([v(3), v(2), v(1)]),
+                4 => faces.push([v(1), v(1), v(2)]),
+                _ => {}
+            }
+            m.triangles.extend(faces);
+        }
+        let got = edges(&m);
+        assert_eq!(got, edges_by_map(&m));
+        // Closed tetrahedra (k % 7 in 0, 5, 6) have no bad edges; each
+        // defect adds 3 (flipped, hole, doubled) or, for the repeated
+        // corner, its self-loop and the two edges it doubles.
+        assert!(got.1 > 0 && got.0 > 6 * n as usize);
+        assert_eq!(edges(&tetra()), (6, 0));
     }
 
     #[test]

@@ -17,12 +17,13 @@
 //! [`JobOptions::colour`] colours the vertices by an attribute channel
 //! (PLY, OBJ, 3MF; checked before meshing).
 
-use crate::check::summary;
 use crate::memory::{self, Estimate, GIB};
 use crate::sampled::{sampled_volume, SampledVolume};
 use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
 use crate::write::colour::{channel_tape, scale_of, vertex_colours, ColourBy, ColourScale};
-use crate::write::{check_colours, format_of, stream_mesh_coloured, write_uncommitted, MeshFormat};
+use crate::write::{
+    check_colours, format_of, stream_mesh_coloured, write_uncommitted_measured, MeshFormat,
+};
 use crate::{Grid, Mesh, MeshError, MeshOptions, Plan};
 use microfrep_core::{ErrorCensus, Shape};
 use std::path::Path;
@@ -213,38 +214,43 @@ pub fn mesh_to_file(
             None => None,
         };
         colour_scale = colours.as_ref().map(|c| c.scale);
-        // The mesh is checked while it is written (the edge check is as
-        // costly as the encoding); the file is put in place only if the
-        // verdict passes, else dropping it removes it.
-        let (r, file) = rayon::join(
-            || summary(&mesh),
-            || {
-                write(
-                    format,
-                    out,
-                    &plan,
-                    &mesh,
-                    colours.as_ref().map(|c| &c.rgb[..]),
-                )
-            },
+        // The file is encoded first (all threads), then synced and put in
+        // place, if the verdict passes, on a thread of its own (the sync
+        // waits on the disk) while the pool counts the edges; dropped, the
+        // file is removed. (Run side by side under `rayon::join`, the
+        // encoder's ordered writes waited behind stolen census work.) The
+        // verdict needs the volume: STL measures it while encoding (the
+        // facet normals are the same products), other formats take a pass
+        // over the triangles.
+        let bbox = crate::check::bbox(&mesh);
+        let measured = (!format.measures_volume()).then(|| crate::check::volume_area(&mesh));
+        let (file, m) = write(
+            format,
+            out,
+            &plan,
+            &mesh,
+            colours.as_ref().map(|c| &c.rgb[..]),
         );
+        let (volume, area) = measured
+            .or(m)
+            .unwrap_or_else(|| crate::check::volume_area(&mesh));
         let t = Tally {
-            vertices: r.vertices as u64,
-            triangles: r.triangles as u64,
-            volume: r.volume,
-            area: r.area,
-            bbox: r.bbox,
+            vertices: mesh.vertices.len() as u64,
+            triangles: mesh.triangles.len() as u64,
+            volume,
+            area,
+            bbox,
         };
         verdict(&t)?;
-        file?.commit()?;
-        summary_of(
-            &opts,
-            &plan,
-            &t,
-            Some((r.bad_edges, r.euler)),
-            predicted,
-            false,
-        )
+        let file = file?;
+        let (committed, (edges, bad_edges)) = std::thread::scope(|sc| {
+            let sync = sc.spawn(move || file.commit());
+            let e = crate::check::edges(&mesh);
+            (sync.join(), e)
+        });
+        committed.map_err(|_| MeshError::Internal("the file sync thread panicked".into()))??;
+        let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
+        summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
     };
     s.thin_cells = plan.thin_cells();
     s.runtime_errors = error_census(shape, &plan);
@@ -255,15 +261,24 @@ pub fn mesh_to_file(
     Ok(s)
 }
 
+/// Writes the mesh uncommitted; the volume and area where the format
+/// measured them while encoding. On a write error the volume is still
+/// wanted (the verdict's error comes first), hence the pair.
 fn write(
     format: &dyn MeshFormat,
     out: &Path,
     plan: &Plan,
     mesh: &Mesh,
     colours: Option<&[[u8; 3]]>,
-) -> Result<microfrep_io::AtomicFile, MeshError> {
+) -> (
+    Result<microfrep_io::AtomicFile, MeshError>,
+    Option<(f64, f64)>,
+) {
     let normals = format.wants_normals().then(|| plan.normals(mesh));
-    write_uncommitted(out, mesh, normals.as_deref(), colours)
+    match write_uncommitted_measured(out, mesh, normals.as_deref(), colours) {
+        Ok((f, m)) => (Ok(f), m),
+        Err(e) => (Err(e), None),
+    }
 }
 
 fn summary_of(

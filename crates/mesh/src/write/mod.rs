@@ -47,6 +47,24 @@ pub trait MeshFormat: OutputFormat {
         colours: Option<&[[u8; 3]]>,
         out: &mut AtomicFile,
     ) -> std::io::Result<()>;
+    /// Whether [`MeshFormat::write_measured`] returns the volume and area.
+    fn measures_volume(&self) -> bool {
+        false
+    }
+    /// [`MeshFormat::write`], also returning the mesh's volume and area
+    /// ([`crate::check::volume_area`], the same values bit for bit) where
+    /// the format computes them anyway while encoding (STL's facet
+    /// normals), so a job saves a pass over the triangles; `None` where it
+    /// does not.
+    fn write_measured(
+        &self,
+        mesh: &Mesh,
+        normals: Option<&[[f32; 3]]>,
+        colours: Option<&[[u8; 3]]>,
+        out: &mut AtomicFile,
+    ) -> std::io::Result<Option<(f64, f64)>> {
+        self.write(mesh, normals, colours, out).map(|_| None)
+    }
 }
 
 /// The mesh formats, by extension.
@@ -97,6 +115,17 @@ pub fn write_uncommitted(
     normals: Option<&[[f32; 3]]>,
     colours: Option<&[[u8; 3]]>,
 ) -> Result<AtomicFile, MeshError> {
+    write_uncommitted_measured(out, mesh, normals, colours).map(|(f, _)| f)
+}
+
+/// [`write_uncommitted`], also returning the volume and area where the
+/// format measured them while encoding ([`MeshFormat::write_measured`]).
+pub fn write_uncommitted_measured(
+    out: &Path,
+    mesh: &Mesh,
+    normals: Option<&[[f32; 3]]>,
+    colours: Option<&[[u8; 3]]>,
+) -> Result<(AtomicFile, Option<(f64, f64)>), MeshError> {
     let format = format_of(out)?;
     if colours.is_some() {
         check_colours(format, out)?;
@@ -110,10 +139,10 @@ pub fn write_uncommitted(
         )));
     }
     let mut f = AtomicFile::create(out)?;
-    format
-        .write(mesh, normals, colours, &mut f)
+    let measured = format
+        .write_measured(mesh, normals, colours, &mut f)
         .map_err(|e| MeshError::from(f.err(e)))?;
-    Ok(f)
+    Ok((f, measured))
 }
 
 /// An error unless `format` (of `out`) stores per-vertex colours.
@@ -128,28 +157,33 @@ pub fn check_colours(format: &dyn MeshFormat, out: &Path) -> Result<(), MeshErro
     )))
 }
 
-/// Items per parallel encoding chunk.
-const CHUNK: usize = 1 << 16;
+/// Items per parallel encoding chunk (the chunk of
+/// [`crate::check::volume_area`] too, so sums per chunk agree).
+pub(crate) const CHUNK: usize = 1 << 16;
 
 /// Encodes `items` in parallel chunks with `enc` and writes the chunks in
-/// order, a few at a time so memory stays bounded.
+/// order, a few at a time so memory stays bounded. The chunk buffers are
+/// reused from group to group (fresh ones cost a page fault per 4 KiB).
 pub(crate) fn write_encoded<T: Sync>(
     w: &mut impl Write,
     items: &[T],
     enc: impl Fn(&[T], &mut Vec<u8>) + Sync,
 ) -> std::io::Result<()> {
-    let group = CHUNK * 4 * rayon::current_num_threads().max(1);
-    for g in items.chunks(group) {
-        let bufs: Vec<Vec<u8>> = g
-            .par_chunks(CHUNK)
-            .map(|c| {
-                let mut b = Vec::new();
-                enc(c, &mut b);
-                b
-            })
-            .collect();
-        for b in bufs {
-            w.write_all(&b)?;
+    let per_group = 4 * rayon::current_num_threads().max(1);
+    let mut bufs: Vec<Vec<u8>> = Vec::new();
+    for g in items.chunks(CHUNK * per_group) {
+        let n = g.len().div_ceil(CHUNK);
+        if bufs.len() < n {
+            bufs.resize_with(n, Vec::new);
+        }
+        g.par_chunks(CHUNK)
+            .zip(bufs[..n].par_iter_mut())
+            .for_each(|(c, b)| {
+                b.clear();
+                enc(c, b);
+            });
+        for b in &bufs[..n] {
+            w.write_all(b)?;
         }
     }
     Ok(())
