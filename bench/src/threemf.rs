@@ -45,34 +45,7 @@ fn mesh(e: &Expr, lo: [f64; 3], hi: [f64; 3], voxel: f64) -> Result<TriMesh, Str
 }
 
 fn cube_mesh(s: f64) -> Mesh {
-    let v: Vec<[f64; 3]> = (0..8)
-        .map(|i| {
-            [
-                (i & 1) as f64 * s,
-                (i >> 1 & 1) as f64 * s,
-                (i >> 2) as f64 * s,
-            ]
-        })
-        .collect();
-    let t = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    Mesh {
-        vertices: v,
-        triangles: t,
-        ..Mesh::default()
-    }
+    Mesh::cuboid([0.0; 3], [s; 3])
 }
 
 fn write_model(m: &Model) -> Result<(Vec<u8>, f64), String> {

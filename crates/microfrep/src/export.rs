@@ -557,28 +557,7 @@ fn image_function(
 
 /// A closed box mesh (12 triangles, outward).
 fn box_mesh(b: Bounds) -> Mesh3 {
-    let vertices = (0..8)
-        .map(|i| std::array::from_fn(|a| if i >> a & 1 == 1 { b.max[a] } else { b.min[a] }))
-        .collect();
-    let triangles = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    Mesh3 {
-        vertices,
-        triangles,
-        ..Mesh3::default()
-    }
+    Mesh3::cuboid(b.min, b.max)
 }
 
 /// A property name for attribute `k`: its own name when it is an XML-safe

@@ -251,6 +251,37 @@ pub struct Mesh {
     pub volume_id: Option<u32>,
 }
 
+impl Mesh {
+    /// The closed box `[min, max]`: 8 vertices (vertex `i` takes `max` on
+    /// axis `a` where bit `a` of `i` is set, else `min`) and 12 triangles
+    /// facing outwards. For clipping meshes, bounding boxes of level sets
+    /// and tests.
+    pub fn cuboid(min: [f64; 3], max: [f64; 3]) -> Mesh {
+        let vertices = (0..8)
+            .map(|i| std::array::from_fn(|a| if i >> a & 1 == 1 { max[a] } else { min[a] }))
+            .collect();
+        let triangles = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        Mesh {
+            vertices,
+            triangles,
+            ..Mesh::default()
+        }
+    }
+}
+
 /// A component of a components object.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Component {
