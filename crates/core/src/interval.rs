@@ -55,6 +55,13 @@ impl Interval {
     pub fn new(lo: f64, hi: f64) -> Interval {
         Interval { lo, hi, nan: false }
     }
+    /// `[a, b]` (`a <= b`) widened to hold the f32 roundings of its ends:
+    /// the coordinates the batch evaluator is actually given, so that an
+    /// interval over a tile bounds the f32 samples taken in it.
+    pub fn with_f32_ends(a: f64, b: f64) -> Interval {
+        let (fa, fb) = (a as f32 as f64, b as f32 as f64);
+        Interval::new(a.min(fa), b.max(fb))
+    }
     /// The single value `v`.
     pub fn point(v: f64) -> Interval {
         Interval::new(v, v)
@@ -729,4 +736,22 @@ fn atan2_bounds(y: Interval, x: Interval) -> Interval {
         c.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
     )
     .widen()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Interval;
+
+    #[test]
+    fn f32_ends_hold_the_rounded_coordinates() {
+        // 0.1 rounds up in f32, 0.7 rounds down: both ends must move out.
+        for (a, b) in [(0.1, 0.7), (-0.7, -0.1), (0.1, 0.1), (1.0, 2.0)] {
+            let i = Interval::with_f32_ends(a, b);
+            for v in [a, b, a as f32 as f64, b as f32 as f64] {
+                assert!(i.lo <= v && v <= i.hi, "{v} outside {i:?}");
+            }
+            assert!(i.lo >= (a as f32 as f64).min(a) && i.hi <= (b as f32 as f64).max(b));
+        }
+        assert!(Interval::with_f32_ends(0.1, 0.1).hi > 0.1);
+    }
 }

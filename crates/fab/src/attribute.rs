@@ -60,13 +60,6 @@ fn uniform_grey(b: Interval) -> Option<u8> {
     (lo == hi).then_some(lo)
 }
 
-/// The interval from `a` to `b` (`a <= b`) widened to hold their f32
-/// roundings, which is what the batch evaluator is given.
-fn span(a: f64, b: f64) -> Interval {
-    let (fa, fb) = (a as f32 as f64, b as f32 as f64);
-    Interval::new(a.min(fa), b.max(fb))
-}
-
 /// Per-thread evaluators of the channel (or of a tile's shorter tape).
 struct Evals {
     tape: Tape,
@@ -183,9 +176,11 @@ impl Band<'_> {
             return self.split_or_sample(ev, rows, at, size, false);
         }
         // The pixel centres' extent, as given to the batch evaluator too.
-        let xs = span(grid.x(at[0]), grid.x(at[0] + size[0] - 1));
-        let ys = span(grid.y(at[1]), grid.y(at[1] + size[1] - 1));
-        let b = ev.interval.eval(xs, ys, span(self.z, self.z));
+        let xs = Interval::with_f32_ends(grid.x(at[0]), grid.x(at[0] + size[0] - 1));
+        let ys = Interval::with_f32_ends(grid.y(at[1]), grid.y(at[1] + size[1] - 1));
+        let b = ev
+            .interval
+            .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
         if let Some(g) = uniform_grey(b) {
             if g != 0 {
                 for j in at[1]..at[1] + size[1] {

@@ -703,13 +703,6 @@ const LEAF: usize = 16;
 /// Tiles at least this many voxels on a side may get their own tape.
 const SIMPLIFY_TILE: usize = 32;
 
-/// The interval from `a` to `b` (`a <= b`) widened to hold their f32
-/// roundings, which is what the batch evaluator is given.
-fn span(a: f64, b: f64) -> Interval {
-    let (fa, fb) = (a as f32 as f64, b as f32 as f64);
-    Interval::new(a.min(fa), b.max(fb))
-}
-
 /// An evaluator pair of one tape.
 struct Evals {
     tape: Tape,
@@ -807,9 +800,10 @@ impl SourceBand<'_> {
 
     fn bounds(&self, ev: &mut Evals, at: [usize; 2], size: [usize; 2]) -> Interval {
         let g = self.grid;
-        let xs = span(g.x(at[0]), g.x(at[0] + size[0] - 1));
-        let ys = span(g.y(at[1]), g.y(at[1] + size[1] - 1));
-        ev.interval.eval(xs, ys, span(self.z, self.z))
+        let xs = Interval::with_f32_ends(g.x(at[0]), g.x(at[0] + size[0] - 1));
+        let ys = Interval::with_f32_ends(g.y(at[1]), g.y(at[1] + size[1] - 1));
+        ev.interval
+            .eval(xs, ys, Interval::with_f32_ends(self.z, self.z))
     }
 
     /// The inside mask over a tile.
