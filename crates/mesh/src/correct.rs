@@ -24,10 +24,6 @@ pub type Acc = [i32; 5];
 /// Fixed-point units per cell area (or volume).
 const UNIT: f32 = (1u32 << 24) as f32;
 
-fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -43,6 +39,10 @@ fn norm(a: [f32; 3]) -> f32 {
 /// Adds the contribution of every triangle of `tris` (indices into `pos`)
 /// to `acc` (one entry per position), in triangle order. `h` is the cell
 /// size of the grid the triangles were made on.
+///
+/// A block of triangles at a time, in columns (one array per quantity), so
+/// the arithmetic before and after the evaluation vectorises; only the
+/// gathering of corners and the scattering of sums are scalar.
 pub fn accumulate(
     ev: &mut BatchEval,
     pos: &[[f32; 3]],
@@ -50,53 +50,80 @@ pub fn accumulate(
     h: f64,
     acc: &mut [Acc],
 ) {
+    const HALF: usize = BLOCK / 2;
     let step = (h / 8.0) as f32;
     let inv_step = 1.0 / step;
     let limit = (h / 2.0) as f32;
     let to_area = (UNIT as f64 / (h * h)) as f32;
     let to_volume = (UNIT as f64 / (h * h * h)) as f32;
-    const HALF: usize = BLOCK / 2;
-    let mut an = [[0.0f32; 3]; HALF];
+    // Centroids, the edges q - p and r - p, area normals, areas.
+    let mut cen = [[0.0f32; HALF]; 3];
+    let mut e1 = [[0.0f32; HALF]; 3];
+    let mut e2 = [[0.0f32; HALF]; 3];
+    let mut an = [[0.0f32; HALF]; 3];
     let mut area = [0.0f32; HALF];
+    let mut sums = [[0i32; HALF]; 5];
     for chunk in tris.chunks(HALF) {
         let n = chunk.len();
+        for (i, t) in chunk.iter().enumerate() {
+            let [a, b, c] = t.map(|v| pos[v as usize]);
+            for k in 0..3 {
+                cen[k][i] = (a[k] + b[k] + c[k]) * (1.0 / 3.0);
+                e1[k][i] = b[k] - a[k];
+                e2[k][i] = c[k] - a[k];
+            }
+        }
         {
             let (x, y, z) = ev.coords_mut();
-            for (i, t) in chunk.iter().enumerate() {
-                let [p, q, r] = t.map(|v| pos[v as usize]);
-                let c: [f32; 3] = std::array::from_fn(|k| (p[k] + q[k] + r[k]) * (1.0 / 3.0));
-                let a = cross(sub(q, p), sub(r, p));
+            for i in 0..n {
+                let (u, v) = (
+                    [e1[0][i], e1[1][i], e1[2][i]],
+                    [e2[0][i], e2[1][i], e2[2][i]],
+                );
+                let a = cross(u, v);
                 let len = norm(a);
-                (an[i], area[i]) = (a, len);
+                for k in 0..3 {
+                    an[k][i] = a[k];
+                }
+                area[i] = len;
                 let s = step / len;
+                // The centroid, and a point a step out along the normal.
+                let c = [cen[0][i], cen[1][i], cen[2][i]];
                 (x[i], y[i], z[i]) = (c[0], c[1], c[2]);
-                let j = i + n;
-                x[j] = c[0] + s * a[0];
-                y[j] = c[1] + s * a[1];
-                z[j] = c[2] + s * a[2];
+                x[i + n] = c[0] + s * a[0];
+                y[i + n] = c[1] + s * a[1];
+                z[i + n] = c[2] + s * a[2];
             }
         }
         let f = ev.eval_loaded(2 * n);
         let (f0, f1) = f.split_at(n);
-        for (i, t) in chunk.iter().enumerate() {
+        let mut gap = [0.0f32; HALF];
+        for i in 0..n {
             // Gap along the outward normal from the centroid to the surface,
             // from f and its slope along the normal (one-sided difference).
             let slope = (f1[i] - f0[i]) * inv_step;
             let d = -f0[i] / slope;
-            let gap = if slope < 0.0 && d.is_finite() {
+            gap[i] = if slope < 0.0 && d.is_finite() {
                 d.clamp(-limit, limit)
             } else {
                 0.0
             };
-            let (a, w) = (an[i], area[i]);
-            let q = |v: f32, unit: f32| (v * unit).round() as i32;
-            let add = [
-                q(a[0], to_area),
-                q(a[1], to_area),
-                q(a[2], to_area),
-                q(w * gap, to_volume),
-                q(w, to_area),
-            ];
+        }
+        // Separate loops, so each vectorises.
+        let q = |v: f32| v.round_ties_even() as i32;
+        for k in 0..3 {
+            for i in 0..n {
+                sums[k][i] = q(an[k][i] * to_area);
+            }
+        }
+        for i in 0..n {
+            sums[3][i] = q(area[i] * gap[i] * to_volume);
+        }
+        for i in 0..n {
+            sums[4][i] = q(area[i] * to_area);
+        }
+        for (i, t) in chunk.iter().enumerate() {
+            let add = [0, 1, 2, 3, 4].map(|k| sums[k][i]);
             for &v in t {
                 let s = &mut acc[v as usize];
                 for k in 0..5 {
@@ -114,42 +141,104 @@ pub fn add(a: &mut Acc, b: &Acc) {
     }
 }
 
-/// The displacement of a vertex along its mean normal by 3/4 of its mean
-/// gap, from its sums on a grid of cell size `h` (zero where they are
-/// degenerate).
-pub fn displacement(a: &Acc, h: f64) -> [f32; 3] {
-    let n = [a[0] as f64, a[1] as f64, a[2] as f64];
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if len > 0.0 && a[4] > 0 {
-        let d = 0.75 * h * (a[3] as f64 / a[4] as f64) / len;
-        if d.is_finite() {
-            return n.map(|v| (d * v) as f32);
+/// Moves every vertex of `pos` along its mean normal by 3/4 of its mean
+/// gap, from its sums `own + inbound` (one entry each per vertex) on a grid
+/// of cell size `h`, with no part of a move taking a vertex further
+/// outside the box `lo..hi` than it is: along an axis where the move would
+/// leave the box it stops at the face (a vertex on a face slides within
+/// it), so the correction never pushes a vertex through the box's faces,
+/// edges or corners. Then every vertex is clamped into the box. Vertices
+/// whose sums are degenerate (no area, no normal) do not move.
+///
+/// In f32 and a block of vertices at a time, in columns, so the square
+/// roots and divisions vectorise.
+pub fn apply_all(
+    pos: &mut [[f32; 3]],
+    own: &[Acc],
+    inbound: &[Acc],
+    h: f64,
+    lo: [f32; 3],
+    hi: [f32; 3],
+) {
+    const N: usize = 64;
+    let scale = (0.75 * h) as f32;
+    let mut col = [[0.0f32; N]; 5];
+    let mut d = [[0.0f32; N]; 3];
+    for ((p, a), b) in pos.chunks_mut(N).zip(own.chunks(N)).zip(inbound.chunks(N)) {
+        let n = p.len();
+        for i in 0..n {
+            for k in 0..5 {
+                col[k][i] = a[i][k].saturating_add(b[i][k]) as f32;
+            }
+        }
+        for i in 0..n {
+            let len2 = col[0][i] * col[0][i] + col[1][i] * col[1][i] + col[2][i] * col[2][i];
+            let f = scale * col[3][i] / (col[4][i] * len2.sqrt());
+            let f = if len2 > 0.0 && col[4][i] > 0.0 && f.is_finite() {
+                f
+            } else {
+                0.0
+            };
+            for k in 0..3 {
+                d[k][i] = f * col[k][i];
+            }
+        }
+        for (i, v) in p.iter_mut().enumerate() {
+            for k in 0..3 {
+                let (c, dk) = (v[k], d[k][i]);
+                let q = c + dk;
+                let moved = if dk > 0.0 {
+                    q.min(hi[k].max(c))
+                } else {
+                    q.max(lo[k].min(c))
+                };
+                v[k] = moved.clamp(lo[k], hi[k]);
+            }
         }
     }
-    [0.0; 3]
 }
 
-/// Moves `p` along its mean normal by 3/4 of its mean gap.
-pub fn apply(p: &mut [f32; 3], a: &Acc, h: f64) {
-    let d = displacement(a, h);
-    for k in 0..3 {
-        p[k] += d[k];
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moves_follow_the_sums_and_stop_at_the_box() {
+        // Unit area-weighted normal +x, mean gap 0.2 cells: a move of
+        // 0.75 * 0.2 * h along +x; degenerate sums do not move.
+        let h = 0.5;
+        let u = 1 << 20;
+        let out: Acc = [u, 0, 0, u / 5, u];
+        let zero: Acc = [0; 5];
+        let lo = [-1.0f32; 3];
+        let hi = [1.0f32; 3];
+        let mut p = vec![
+            [0.0f32; 3],
+            [0.99, 0.5, 0.0],
+            [0.3, 0.3, 0.3],
+            [1.0, 0.0, 0.0],
+        ];
+        let own = vec![out, out, zero, out];
+        let inbound = vec![zero, zero, zero, zero];
+        apply_all(&mut p, &own, &inbound, h, lo, hi);
+        assert!((p[0][0] - 0.075).abs() < 1e-6, "{:?}", p[0]);
+        assert_eq!(&p[0][1..], &[0.0, 0.0]);
+        // Near the face x = 1: stops on it, and slides nowhere else.
+        assert_eq!(p[1], [1.0, 0.5, 0.0]);
+        assert_eq!(p[2], [0.3, 0.3, 0.3]);
+        assert_eq!(p[3], [1.0, 0.0, 0.0]);
+        // Own and inbound sums add: half the gap each way gives the same.
+        let half: Acc = [u / 2, 0, 0, u / 10, u / 2];
+        let mut q = vec![[0.0f32; 3]];
+        apply_all(&mut q, &[half], &[half], h, lo, hi);
+        assert!((q[0][0] - 0.075).abs() < 1e-6, "{:?}", q[0]);
     }
-}
 
-/// Like [`apply`], but no part of the move takes `p` further outside the
-/// box `lo..hi` than it is: along an axis where the move would leave the
-/// box, it stops at the face (so a vertex on a face slides within it). The
-/// correction never pushes a vertex through the box's faces, edges or
-/// corners.
-pub fn apply_within(p: &mut [f32; 3], a: &Acc, h: f64, lo: [f32; 3], hi: [f32; 3]) {
-    let d = displacement(a, h);
-    for k in 0..3 {
-        let q = p[k] + d[k];
-        p[k] = if d[k] > 0.0 {
-            q.min(hi[k].max(p[k]))
-        } else {
-            q.max(lo[k].min(p[k]))
-        };
+    #[test]
+    fn a_vertex_outside_the_box_is_clamped_onto_it() {
+        let zero: Acc = [0; 5];
+        let mut p = vec![[1.5f32, -2.0, 0.25]];
+        apply_all(&mut p, &[zero], &[zero], 0.1, [-1.0; 3], [1.0; 3]);
+        assert_eq!(p[0], [1.0, -1.0, 0.25]);
     }
 }

@@ -16,7 +16,7 @@
 
 use crate::brick::{mesh_brick, BrickMesh, Scratch};
 use crate::classify::BrickClass;
-use crate::correct::{accumulate, add, apply_within, Acc};
+use crate::correct::{accumulate, add, apply_all, Acc};
 use crate::sink::{MeshSink, VertexWindow};
 use crate::{MeshError, Plan};
 use microfrep_core::BatchEval;
@@ -275,12 +275,7 @@ fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp) {
         .par_iter_mut()
         .zip(g.work.par_iter())
         .for_each(|(m, w)| {
-            for ((p, a), b) in m.owned_pos.iter_mut().zip(&w.acc).zip(&w.inbound) {
-                let mut s = *a;
-                add(&mut s, b);
-                apply_within(p, &s, h, clamp.lo, clamp.hi);
-                clamp.apply(p);
-            }
+            apply_all(&mut m.owned_pos, &w.acc, &w.inbound, h, clamp.lo, clamp.hi);
         });
     let n: usize = g.meshes.iter().map(|m| m.owned_pos.len()).sum();
     let mut verts = Vec::with_capacity(n);
@@ -346,11 +341,13 @@ pub fn run(
     let mut cur = mesh_next()?;
     let mut next = mesh_next()?;
     while let Some(mut g) = cur.take() {
-        plan.stage_a(&mut g, next.as_ref())?;
-        stage_b(&mut g, next.as_mut());
-        stage_c(&mut g, plan.grid.h, &clamp);
+        // Stages A to D of `g` need only `g`, `next` and `prev`, so they
+        // run while the pool meshes the group after `next`.
         let (emitted, after) = rayon::join(
             || -> Result<(), MeshError> {
+                plan.stage_a(&mut g, next.as_ref())?;
+                stage_b(&mut g, next.as_mut());
+                stage_c(&mut g, plan.grid.h, &clamp);
                 sink.vertices(&g.verts)?;
                 match &prev {
                     Some(p) => emit_triangles(sink, p, Some(&g)),
@@ -371,7 +368,7 @@ pub fn run(
 }
 
 /// The meshed box in f32, rounded inwards. The volume correction never
-/// pushes a vertex through it ([`crate::correct::apply_within`]), and what
+/// pushes a vertex through it ([`crate::correct::apply_all`]), and what
 /// refinement left outside (a probe a little past a face where a tet's
 /// diagonal crosses the box's edge) is clamped onto the face. Vertices
 /// move; which triangles use them does not, so the mesh stays closed and
@@ -409,12 +406,6 @@ impl BoxClamp {
         BoxClamp {
             lo: b[0].map(|v| inward(v, true)),
             hi: b[1].map(|v| inward(v, false)),
-        }
-    }
-
-    pub(crate) fn apply(&self, p: &mut [f32; 3]) {
-        for ((c, lo), hi) in p.iter_mut().zip(self.lo).zip(self.hi) {
-            *c = c.clamp(lo, hi);
         }
     }
 }
