@@ -64,7 +64,6 @@ impl Edge {
 /// away from the ends.
 pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>) {
     for chunk in edges.chunks(BLOCK) {
-        let n = chunk.len();
         let mut lo = [0.0f32; BLOCK];
         let mut hi = [1.0f32; BLOCK];
         let mut glo = [0.0f32; BLOCK];
