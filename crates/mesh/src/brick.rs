@@ -82,7 +82,7 @@ pub fn mesh_brick(
     s: &mut Scratch,
 ) -> BrickMesh {
     let (lo, n) = grid.brick_nodes(b);
-    sample(grid, lo, n, s);
+    let mut local = sample(grid, lo, n, s);
     fix_signs(grid, classes, lo, n, s);
     let total = n[0] * n[1] * n[2];
     let first = s.inside[0];
@@ -201,7 +201,13 @@ pub fn mesh_brick(
             out.foreign_keys.push(gkey);
         }
     }
-    refine_edges(&mut s.batch, &s.edges, &mut out.owned_pos);
+    // The shortened tape keeps the zero set, so the roots are the same
+    // (found in fewer operations).
+    refine_edges(
+        local.as_mut().unwrap_or(&mut s.batch),
+        &s.edges,
+        &mut out.owned_pos,
+    );
     // Foreign vertices follow the owned ones, in the order of `foreign_keys`.
     let unset = s.remap.iter_mut().filter(|r| **r == u32::MAX);
     for (next, r) in (owned..).zip(unset) {
@@ -218,8 +224,9 @@ pub fn mesh_brick(
 
 /// Samples the brick's nodes in f32 batches; inside is `f >= 0` (NaN is
 /// outside). Coordinates come from global node indices, so a node shared by
-/// two bricks gets the same value in both.
-fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
+/// two bricks gets the same value in both. Returns the evaluator of the
+/// shortened tape, where one was made.
+fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) -> Option<BatchEval> {
     let axis = |a: usize| -> Vec<f32> {
         (0..n[a])
             .map(|i| (grid.origin[a] + grid.h * (lo[a] + i) as f64) as f32)
@@ -296,6 +303,7 @@ fn sample(grid: &Grid, lo: [usize; 3], n: [usize; 3], s: &mut Scratch) {
             s.inside[q] = (f >= 0.0) as u8;
         }
     }
+    local
 }
 
 /// Makes the signs of nodes on the brick's faces agree with every brick

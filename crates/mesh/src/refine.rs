@@ -1,19 +1,13 @@
 //! Moving vertices from their grid edges onto the surface: regula falsi
 //! (Illinois variant) along each edge, a block of edges at a time on the
-//! f32 batch evaluator (one evaluation per step for the edges of the block
-//! still searching; the f64 point evaluator was 5x slower than the rest of
-//! the mesher together).
+//! f32 batch evaluator (one evaluation per step for the whole block; the
+//! f64 point evaluator was 5x slower than the rest of the mesher together).
 
 use microfrep_core::{BatchEval, BLOCK};
 
 /// Regula falsi steps; Illinois converges superlinearly, so a few steps
 /// reach f32 precision on smooth surfaces.
 const STEPS: usize = 5;
-/// An edge stops searching once a step moved its probe by less than this
-/// fraction of the edge, or less than [`MIN_ULPS`] f32 steps of its
-/// coordinates (converging superlinearly, it is then nearer the root than
-/// that, or as near as f32 positions can tell).
-const TOL: f32 = 1.0 / (1u32 << 20) as f32;
 /// Vertices stay this fraction of the edge away from its ends, so vertices
 /// on different edges of a tet never coincide (no degenerate triangles).
 const T_MIN: f32 = 1e-3;
@@ -31,10 +25,6 @@ pub struct Edge {
     g1: f32,
     /// The least distance from either end, as a fraction of the edge.
     t_min: f32,
-    /// A probe that moves less than this fraction of the edge has
-    /// converged: a few f32 steps of the coordinates (or 2^-20 of the edge,
-    /// whichever is more).
-    t_tol: f32,
 }
 
 impl Edge {
@@ -51,7 +41,6 @@ impl Edge {
             g0,
             g1,
             t_min: (ulps as f32).clamp(T_MIN, 0.25),
-            t_tol: (ulps as f32).max(TOL),
         }
     }
 }
@@ -64,6 +53,7 @@ impl Edge {
 /// away from the ends.
 pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>) {
     for chunk in edges.chunks(BLOCK) {
+        let n = chunk.len();
         let mut lo = [0.0f32; BLOCK];
         let mut hi = [1.0f32; BLOCK];
         let mut glo = [0.0f32; BLOCK];
@@ -76,72 +66,55 @@ pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>)
         // Illinois halves the value kept at the other end only when the
         // same end is replaced twice running.
         let mut side = [0i8; BLOCK];
-        // The edges still searching, packed at the front, so each step
-        // evaluates only those.
-        let mut active = [0u16; BLOCK];
-        let mut m = 0;
         for (i, e) in chunk.iter().enumerate() {
             glo[i] = e.g0;
             ghi[i] = e.g1;
             live[i] = e.g0 >= 0.0 && e.g1 < 0.0;
-            if live[i] {
-                active[m] = i as u16;
-                m += 1;
-            }
         }
-        for step in 0..STEPS {
-            if m == 0 {
+        for _ in 0..STEPS {
+            if !live[..n].iter().any(|&l| l) {
                 break;
             }
-            let mut moved = [0.0f32; BLOCK];
             {
                 let (x, y, z) = ev.coords_mut();
-                for (j, &a) in active[..m].iter().enumerate() {
-                    let i = a as usize;
-                    let s = (lo[i] * ghi[i] - hi[i] * glo[i]) / (ghi[i] - glo[i]);
-                    let next = if s > lo[i] && s < hi[i] {
-                        s
-                    } else {
-                        0.5 * (lo[i] + hi[i])
-                    };
-                    moved[j] = (next - t[i]).abs();
-                    t[i] = next;
-                    let p = lerp(&chunk[i], next);
-                    (x[j], y[j], z[j]) = (p[0], p[1], p[2]);
+                for (i, e) in chunk.iter().enumerate() {
+                    if live[i] {
+                        let s = (lo[i] * ghi[i] - hi[i] * glo[i]) / (ghi[i] - glo[i]);
+                        t[i] = if s > lo[i] && s < hi[i] {
+                            s
+                        } else {
+                            0.5 * (lo[i] + hi[i])
+                        };
+                    }
+                    let p = lerp(e, t[i]);
+                    (x[i], y[i], z[i]) = (p[0], p[1], p[2]);
                 }
             }
-            let g = ev.eval_loaded(m);
-            let mut kept = 0;
-            for j in 0..m {
-                let i = active[j] as usize;
-                let gi = g[j];
-                if gi == 0.0 {
-                    live[i] = false; // on the surface: keep t
+            let g = ev.eval_loaded(n);
+            for i in 0..n {
+                if !live[i] {
                     continue;
-                } else if gi > 0.0 {
+                }
+                if g[i] == 0.0 {
+                    live[i] = false; // on the surface: keep t
+                } else if g[i] > 0.0 {
                     lo[i] = t[i];
-                    glo[i] = gi;
+                    glo[i] = g[i];
                     if side[i] == 1 {
                         ghi[i] *= 0.5;
                     }
                     side[i] = 1;
-                } else if gi < 0.0 {
+                } else if g[i] < 0.0 {
                     hi[i] = t[i];
-                    ghi[i] = gi;
+                    ghi[i] = g[i];
                     if side[i] == -1 {
                         glo[i] *= 0.5;
                     }
                     side[i] = -1;
                 } else {
                     live[i] = false; // NaN: stop here
-                    continue;
-                }
-                if step == 0 || moved[j] > chunk[i].t_tol {
-                    active[kept] = active[j];
-                    kept += 1;
                 }
             }
-            m = kept;
         }
         for (i, e) in chunk.iter().enumerate() {
             let root_at_start = e.g0 == 0.0 && e.g1 < 0.0 && lo[i] == 0.0 && live[i];
