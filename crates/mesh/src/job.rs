@@ -7,7 +7,11 @@
 //! included) against what the process may really use
 //! ([`microfrep_io::limits::memory_limit`]: RAM, cgroup, `RLIMIT_AS`);
 //! STL and PLY are streamed to disk when the mesh would not fit (or when
-//! asked), after a check of the free disk. After meshing, and before the
+//! asked), after a check of the free disk. Otherwise an STL is still
+//! encoded, measured and sent to the disk while the mesh is made, its
+//! edges counted meanwhile ([`crate::check::EdgeCensus`]): the same bytes
+//! and figures as meshing into memory first, in little more than the
+//! meshing's time. After meshing, and before the
 //! output appears, the mesh is refused when it is empty (with the reason)
 //! or when it lost more volume than [`JobOptions::max_volume_loss`] against
 //! the model's own sampled volume ([`crate::sampled`]): features thinner
@@ -198,16 +202,44 @@ pub fn mesh_to_file(
     // Runs after meshing, before the output is committed.
     let verdict = |t: &Tally| verdict(shape, &plan, &opts, job, sampled.as_ref(), t);
     let colour_scale;
+    // A mesh the resolution search kept is written as it is (unless asked
+    // to stream).
+    let kept = kept.filter(|_| !job.stream);
     let mut s = if stream {
         let colour = job.colour.as_ref().map(|c| (shape, c));
         let normals = format.wants_normals();
         let (t, scale) = stream_mesh_coloured(&plan, out, normals, colour, &progress, &verdict)?;
         colour_scale = scale;
         summary_of(&opts, &plan, &t, None, predicted, true)
+    } else if kept.is_none() && crate::write::is_stl(format) {
+        // STL is encoded, measured and on its way to the disk while the
+        // mesh is made, and its edges are counted meanwhile; its triangles
+        // are never held whole. Put in place only if the verdict passes
+        // (dropped, the file is removed).
+        colour_scale = None;
+        let (file, m) = crate::write::mesh_to_stl(&plan, out, &progress)?;
+        let t = Tally {
+            vertices: m.vertices,
+            triangles: m.triangles,
+            volume: m.measured.0,
+            area: m.measured.1,
+            bbox: m.bbox,
+        };
+        verdict(&t)?;
+        let (edges, bad_edges) = match m.edges {
+            Some(e) => e,
+            // The census relies on the pipeline's order (see
+            // `check::EdgeCensus`); should that not hold, the mesh is made
+            // again in memory and counted.
+            None => crate::check::edges(&plan.run(&progress)?),
+        };
+        file.commit()?;
+        let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
+        summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
     } else {
         let mesh = match kept {
-            Some(m) if !job.stream => m,
-            _ => plan.run(&progress)?,
+            Some(m) => m,
+            None => plan.run(&progress)?,
         };
         let colours = match &job.colour {
             Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
