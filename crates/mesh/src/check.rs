@@ -945,6 +945,15 @@ mod tests {
         for _ in 0..20 {
             far.triangles.extend([[2, 3, 50], [2, 3, 51], [3, 2, 52]]);
         }
+        // Repeated corners at vertices with other upper neighbours, before
+        // and after them, near and far (whatever slots their keys take).
+        for k in 0..40u32 {
+            let v = 100 + 200 * k;
+            far.triangles.push([v, v, v + 1 + k]);
+            far.triangles.push([v, v + 1 + k, v + 2 + 2 * k]);
+            far.triangles.push([v + 2 + 2 * k, v + 1 + k, v]);
+            far.triangles.push([v, v + 3 + 3 * k, v]);
+        }
         let want = edges_by_map(&far);
         assert!(want.1 > 0);
         assert_eq!(census_in_one_batch(&far, 5), Some(want));
