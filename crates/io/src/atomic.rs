@@ -142,8 +142,40 @@ pub struct AtomicFile {
     /// Whether the file may still switch to direct writes: nothing has
     /// reached it yet, and no seek or flush happened.
     may_go_direct: bool,
+    /// A buffer is lent out ([`AtomicFile::lend`]): nothing may be written.
+    lent: bool,
+    /// The buffer lent out when writing buffered, kept for the next lend.
+    plain: Vec<u8>,
     id: u64,
     scratch: u64,
+}
+
+/// Space for the next bytes of an [`AtomicFile`], lent by
+/// [`AtomicFile::lend`] to be filled in place ([`Lent::bytes`]) and
+/// handed back with [`AtomicFile::put`].
+pub struct Lent {
+    buf: LentBuf,
+    /// Where the caller's bytes start in `buf`.
+    start: usize,
+    len: usize,
+}
+
+enum LentBuf {
+    Plain(Vec<u8>),
+    #[cfg(target_os = "linux")]
+    Stage(direct::Stage),
+}
+
+impl Lent {
+    /// The lent bytes, to be filled (their old contents are unspecified).
+    pub fn bytes(&mut self) -> &mut [u8] {
+        let (start, end) = (self.start, self.start + self.len);
+        match &mut self.buf {
+            LentBuf::Plain(v) => &mut v[start..end],
+            #[cfg(target_os = "linux")]
+            LentBuf::Stage(s) => &mut s.bytes_mut()[start..end],
+        }
+    }
 }
 
 /// Where an [`AtomicFile`]'s bytes go.
@@ -179,6 +211,8 @@ impl AtomicFile {
             temp,
             file: Some(Out::Buffered(BufWriter::with_capacity(BUFFER, file))),
             may_go_direct: cfg!(target_os = "linux"),
+            lent: false,
+            plain: Vec::new(),
             id,
             scratch: 0,
         })
@@ -222,6 +256,7 @@ impl AtomicFile {
     /// under way (for seeks and flushes, and for a file system refusing
     /// direct I/O).
     fn buffered(&mut self) -> std::io::Result<&mut BufWriter<File>> {
+        self.not_lent()?;
         self.may_go_direct = false;
         #[cfg(target_os = "linux")]
         if let Some(Out::Direct(d)) = &mut self.file {
@@ -268,8 +303,76 @@ impl AtomicFile {
         }
     }
 
+    fn not_lent(&self) -> std::io::Result<()> {
+        if self.lent {
+            return Err(std::io::Error::other(
+                "a buffer of the file is lent out (write it back with put)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Lends space for the next `len` bytes of the file, to be filled in
+    /// place and handed back with [`AtomicFile::put`]: for large outputs
+    /// made in blocks. With direct writes the block then goes to the disk
+    /// from where it was made, without a copy; otherwise `put` writes it as
+    /// `write_all` would. Nothing may be written until it is put back (a
+    /// write, seek, flush or commit meanwhile fails).
+    pub fn lend(&mut self, len: usize) -> std::io::Result<Lent> {
+        self.not_lent()?;
+        #[cfg(target_os = "linux")]
+        if self.may_go_direct {
+            self.maybe_go_direct(len)?;
+        }
+        let lent = match self.file.as_mut().expect("file is present until commit") {
+            #[cfg(target_os = "linux")]
+            Out::Direct(d) => {
+                let (stage, start) = d.lend(len)?;
+                Lent {
+                    buf: LentBuf::Stage(stage),
+                    start,
+                    len,
+                }
+            }
+            Out::Buffered(_) => {
+                let mut v = std::mem::take(&mut self.plain);
+                v.resize(len, 0);
+                Lent {
+                    buf: LentBuf::Plain(v),
+                    start: 0,
+                    len,
+                }
+            }
+        };
+        self.lent = true;
+        Ok(lent)
+    }
+
+    /// Writes the bytes of a buffer from [`AtomicFile::lend`].
+    pub fn put(&mut self, lent: Lent) -> std::io::Result<()> {
+        if !self.lent {
+            return Err(std::io::Error::other("put without a lend"));
+        }
+        self.lent = false;
+        let filled = lent.start + lent.len;
+        match (lent.buf, self.file.as_mut().expect("file is present until commit")) {
+            (LentBuf::Plain(v), Out::Buffered(w)) => {
+                let r = w.write_all(&v[..filled]);
+                self.plain = v;
+                r
+            }
+            #[cfg(target_os = "linux")]
+            (LentBuf::Stage(s), Out::Direct(d)) => d.put(s, filled),
+            #[cfg(target_os = "linux")]
+            _ => Err(std::io::Error::other("put of a buffer lent in another mode")),
+        }
+    }
+
     /// Flushes, syncs and renames the file onto its target.
     pub fn commit(mut self) -> Result<()> {
+        if let Err(e) = self.not_lent() {
+            return Err(self.err(e));
+        }
         let Some(out) = self.file.take() else {
             return Ok(());
         };
@@ -298,6 +401,7 @@ impl Write for AtomicFile {
         Ok(buf.len())
     }
     fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.not_lent()?;
         #[cfg(target_os = "linux")]
         if self.may_go_direct {
             self.maybe_go_direct(buf.len())?;
@@ -566,6 +670,55 @@ mod tests {
         }
         assert_eq!(entries(&d), vec!["s.stl".to_string()]);
         assert!(fs::read(&t).unwrap() == want);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn blocks_filled_in_place_land_where_written_ones_would() {
+        let d = dir("lend");
+        let n = (30 << 20) + 1234;
+        let want = pattern(n);
+        let t = d.join("l.stl");
+        let mut f = AtomicFile::create(&t).unwrap();
+        // A header, then blocks lent and written alternately, small and
+        // larger than a staging buffer, before and after the switch to
+        // direct writes.
+        let sizes = [84, 1000, 3 << 20, 50, 13 << 20, 4096, 7 << 20, 999_999];
+        let (mut at, mut k) = (0, 0);
+        while at < n {
+            let e = (at + sizes[k % sizes.len()]).min(n);
+            if k % 2 == 0 {
+                f.write_all(&want[at..e]).unwrap();
+            } else {
+                let mut l = f.lend(e - at).unwrap();
+                assert_eq!(l.bytes().len(), e - at);
+                // Nothing else while it is out.
+                assert!(f.write_all(b"x").is_err());
+                assert!(f.lend(1).is_err());
+                assert!(f.flush().is_err());
+                l.bytes().copy_from_slice(&want[at..e]);
+                f.put(l).unwrap();
+            }
+            at = e;
+            k += 1;
+        }
+        assert_eq!(f.writes_direct(), expect_direct(&d));
+        assert!(f.put(Lent {
+            buf: LentBuf::Plain(Vec::new()),
+            start: 0,
+            len: 0
+        })
+        .is_err());
+        f.commit().unwrap();
+        assert!(fs::read(&t).unwrap() == want);
+        // A file committed with a buffer still lent out fails and leaves
+        // nothing new.
+        let u = d.join("u.stl");
+        let mut f = AtomicFile::create(&u).unwrap();
+        f.write_all(&pattern(5 << 20)).unwrap();
+        let _l = f.lend(100).unwrap();
+        assert!(f.commit().is_err());
+        assert_eq!(entries(&d), vec!["l.stl".to_string()]);
         fs::remove_dir_all(&d).unwrap();
     }
 

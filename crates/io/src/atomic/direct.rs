@@ -18,6 +18,12 @@
 //! page cache, so the file has exactly the bytes written, no padding. A
 //! write refused with `EINVAL` (a device with blocks larger than 4 KiB)
 //! clears `O_DIRECT` and is repeated buffered: slower, never wrong.
+//!
+//! A caller that makes its bytes in large blocks can also fill a staging
+//! buffer in place ([`Direct::lend`], [`Direct::put`]): the buffer keeps
+//! the unaligned rest of what came before at its start, the caller's block
+//! follows, the aligned part goes to the disk and the new rest (less than
+//! a page) is copied to the next buffer. No copy of the block at all.
 
 use std::fs::File;
 use std::io::{self, Seek, SeekFrom};
@@ -32,7 +38,7 @@ const ALIGN: usize = 4096;
 /// Bytes per staging buffer (one write).
 const STAGE: usize = 4 << 20;
 /// Staging buffers at most: one filling, the others queued or being
-/// written (16 MiB in all).
+/// written (16 MiB in all, more after larger lends).
 const BUFFERS: usize = 4;
 
 /// One aligned page.
@@ -40,22 +46,27 @@ const BUFFERS: usize = 4;
 #[repr(C, align(4096))]
 struct Page([u8; ALIGN]);
 
-/// A staging buffer of [`STAGE`] bytes, aligned to [`ALIGN`].
-struct Stage(Vec<Page>);
+/// A staging buffer, a whole number of pages, aligned to [`ALIGN`].
+pub(super) struct Stage(Vec<Page>);
 
 impl Stage {
-    fn new() -> Stage {
-        Stage(vec![Page([0; ALIGN]); STAGE / ALIGN])
+    /// A buffer of at least `bytes` bytes.
+    fn new(bytes: usize) -> Stage {
+        Stage(vec![Page([0; ALIGN]); bytes.div_ceil(ALIGN)])
     }
 
-    fn bytes(&self) -> &[u8] {
+    fn capacity(&self) -> usize {
+        self.0.len() * ALIGN
+    }
+
+    pub(super) fn bytes(&self) -> &[u8] {
         // SAFETY: `Page` is a plain byte array with no padding (its size
         // equals its alignment), so the pages are `len * ALIGN` initialised
         // bytes in one allocation, borrowed for as long as `self`.
         unsafe { std::slice::from_raw_parts(self.0.as_ptr().cast::<u8>(), self.0.len() * ALIGN) }
     }
 
-    fn bytes_mut(&mut self) -> &mut [u8] {
+    pub(super) fn bytes_mut(&mut self) -> &mut [u8] {
         // SAFETY: as in `bytes`, and the borrow is unique.
         unsafe {
             std::slice::from_raw_parts_mut(self.0.as_mut_ptr().cast::<u8>(), self.0.len() * ALIGN)
@@ -114,17 +125,23 @@ fn writer(f: File, jobs: Receiver<Job>, spare: Sender<Stage>) -> io::Result<()> 
 pub(super) struct Direct {
     /// Present until [`Direct::finish`].
     file: Option<File>,
-    /// The buffer being filled (absent only inside [`Direct::finish`]).
+    /// The buffer being filled (absent while lent, and after `finish`).
     stage: Option<Stage>,
     /// Bytes in `stage`.
     fill: usize,
-    /// File offset of `stage`'s first byte (a multiple of [`STAGE`]).
+    /// File offset of `stage`'s first byte (a multiple of [`ALIGN`]).
     at: u64,
     queue: Option<SyncSender<Job>>,
     spare: Receiver<Stage>,
-    /// Staging buffers made so far.
+    /// Staging buffers made and not dropped.
     made: usize,
+    /// Size of new staging buffers: [`STAGE`], or the largest lend.
+    cap: usize,
     worker: Option<JoinHandle<io::Result<()>>>,
+}
+
+fn lent_out() -> io::Error {
+    io::Error::other("a buffer of the file is lent out (write it back with put)")
 }
 
 impl Direct {
@@ -152,12 +169,13 @@ impl Direct {
         };
         Ok(Direct {
             file: Some(file),
-            stage: Some(Stage::new()),
+            stage: Some(Stage::new(STAGE)),
             fill: 0,
             at: 0,
             queue: Some(queue),
             spare,
             made: 1,
+            cap: STAGE,
             worker: Some(worker),
         })
     }
@@ -170,36 +188,86 @@ impl Direct {
     /// Appends `data`.
     pub(super) fn write_all(&mut self, mut data: &[u8]) -> io::Result<()> {
         while !data.is_empty() {
-            let stage = self.stage.as_mut().expect("present outside finish");
-            let n = (STAGE - self.fill).min(data.len());
+            let stage = self.stage.as_mut().ok_or_else(lent_out)?;
+            let room = stage.capacity() - self.fill;
+            let n = room.min(data.len());
             stage.bytes_mut()[self.fill..self.fill + n].copy_from_slice(&data[..n]);
             self.fill += n;
             data = &data[n..];
-            if self.fill == STAGE {
-                let next = self.spare_stage()?;
-                let full = self.stage.replace(next).expect("present");
-                self.send((self.at, full, STAGE))?;
-                self.at += STAGE as u64;
-                self.fill = 0;
+            if n == room {
+                self.send_aligned()?;
             }
         }
         Ok(())
     }
 
-    /// A free staging buffer: one the writer gave back, a new one while
-    /// fewer than [`BUFFERS`] exist, else the next one it gives back.
-    fn spare_stage(&mut self) -> io::Result<Stage> {
-        if let Ok(s) = self.spare.try_recv() {
-            return Ok(s);
+    /// Sends the whole pages of the buffer being filled to the writer; the
+    /// rest (less than a page) moves to the start of a fresh buffer.
+    fn send_aligned(&mut self) -> io::Result<()> {
+        let aligned = self.fill / ALIGN * ALIGN;
+        if aligned == 0 {
+            return Ok(());
         }
-        if self.made < BUFFERS {
-            self.made += 1;
-            return Ok(Stage::new());
+        let mut next = self.spare_stage(self.cap)?;
+        let stage = self.stage.take().ok_or_else(lent_out)?;
+        let tail = self.fill - aligned;
+        next.bytes_mut()[..tail].copy_from_slice(&stage.bytes()[aligned..self.fill]);
+        self.stage = Some(next);
+        self.send((self.at, stage, aligned))?;
+        self.at += aligned as u64;
+        self.fill = tail;
+        Ok(())
+    }
+
+    /// A free staging buffer of at least `bytes`: one the writer gave back,
+    /// a new one while fewer than [`BUFFERS`] exist, else the next one it
+    /// gives back (one too small is dropped and made anew).
+    fn spare_stage(&mut self, bytes: usize) -> io::Result<Stage> {
+        let s = match self.spare.try_recv() {
+            Ok(s) => s,
+            Err(_) if self.made < BUFFERS => {
+                self.made += 1;
+                return Ok(Stage::new(self.cap.max(bytes)));
+            }
+            Err(_) => match self.spare.recv() {
+                Ok(s) => s,
+                Err(_) => return Err(self.stopped()),
+            },
+        };
+        Ok(if s.capacity() < bytes {
+            Stage::new(self.cap.max(bytes))
+        } else {
+            s
+        })
+    }
+
+    /// A staging buffer holding, at its start, the bytes written and not
+    /// yet sent (fewer than a page; their count is returned), with room
+    /// for `len` more: filled by the caller and handed back to
+    /// [`Direct::put`]. Nothing may be written meanwhile.
+    pub(super) fn lend(&mut self, len: usize) -> io::Result<(Stage, usize)> {
+        self.send_aligned()?;
+        let need = self.fill + len;
+        let stage = self.stage.take().ok_or_else(lent_out)?;
+        if stage.capacity() >= need {
+            return Ok((stage, self.fill));
         }
-        match self.spare.recv() {
-            Ok(s) => Ok(s),
-            Err(_) => Err(self.stopped()),
+        self.cap = self.cap.max(need.div_ceil(ALIGN) * ALIGN);
+        let mut big = Stage::new(self.cap);
+        big.bytes_mut()[..self.fill].copy_from_slice(&stage.bytes()[..self.fill]);
+        Ok((big, self.fill))
+    }
+
+    /// Takes back a buffer from [`Direct::lend`] with `filled` bytes in
+    /// all (the ones it came with and the caller's) and sends its whole
+    /// pages.
+    pub(super) fn put(&mut self, stage: Stage, filled: usize) -> io::Result<()> {
+        if self.stage.is_some() || filled > stage.capacity() {
+            return Err(io::Error::other("put without a matching lend"));
         }
+        self.stage = Some(stage);
+        self.fill = filled;
+        self.send_aligned()
     }
 
     fn send(&mut self, job: Job) -> io::Result<()> {
@@ -231,7 +299,7 @@ impl Direct {
     /// Writes everything still staged, clears `O_DIRECT` and returns the
     /// file, positioned at its end (for buffered writing from there on).
     pub(super) fn finish(&mut self) -> io::Result<File> {
-        let stage = self.stage.take().expect("finish is called once");
+        let stage = self.stage.take().ok_or_else(lent_out)?;
         let aligned = self.fill / ALIGN * ALIGN;
         let tail = stage.bytes()[aligned..self.fill].to_vec();
         let res = if aligned > 0 {

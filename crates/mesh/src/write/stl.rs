@@ -56,15 +56,14 @@ impl MeshFormat for Stl {
     }
 }
 
-/// Encodes triangles into STL records in parallel and writes them in
-/// order, with the volume and area summed per chunk of [`CHUNK`]
-/// triangles and then over the chunks in order, as `check::volume_area`
-/// does (same chunks, same operations, so the same bits). Records go
-/// straight into reused buffers of two chunks (fresh ones cost a page
-/// fault per 4 KiB), a few buffers per step so memory stays bounded.
+/// Encodes triangles into STL records in parallel, straight into the
+/// file's own buffers ([`AtomicFile::lend`]: with direct writes the disk
+/// reads them from there, no copy), with the volume and area summed per
+/// chunk of [`CHUNK`] triangles and then over the chunks in order, as
+/// `check::volume_area` does (same chunks, same operations, so the same
+/// bits). Two chunks a thread at a time, so memory stays bounded.
 #[derive(Default)]
 struct Encoder {
-    bufs: Vec<Vec<u8>>,
     /// Volume and area per chunk encoded so far.
     sums: Vec<(f64, f64)>,
 }
@@ -77,31 +76,18 @@ impl Encoder {
         &mut self,
         tris: &[T],
         corners: impl Fn(&T) -> [[f32; 3]; 3] + Sync,
-        out: &mut impl Write,
+        out: &mut AtomicFile,
     ) -> std::io::Result<()> {
-        let block = 2 * CHUNK;
         let per_group = 2 * rayon::current_num_threads().max(1);
-        for g in tris.chunks(block * per_group) {
-            let n = g.len().div_ceil(block);
-            if self.bufs.len() < n {
-                self.bufs.resize_with(n, Vec::new);
-            }
-            let s: Vec<Vec<(f64, f64)>> = g
-                .par_chunks(block)
-                .zip(self.bufs[..n].par_iter_mut())
-                .map(|(ts, b)| {
-                    // Only a shorter last block changes the length.
-                    b.resize(50 * ts.len(), 0);
-                    ts.chunks(CHUNK)
-                        .zip(b.chunks_mut(50 * CHUNK))
-                        .map(|(c, bc)| encode_all(c, &corners, bc))
-                        .collect()
-                })
+        for g in tris.chunks(CHUNK * per_group) {
+            let mut lent = out.lend(50 * g.len())?;
+            let s: Vec<(f64, f64)> = g
+                .par_chunks(CHUNK)
+                .zip(lent.bytes().par_chunks_mut(50 * CHUNK))
+                .map(|(c, b)| encode_all(c, &corners, b))
                 .collect();
-            self.sums.extend(s.into_iter().flatten());
-            for b in &self.bufs[..n] {
-                out.write_all(b)?;
-            }
+            self.sums.extend(s);
+            out.put(lent)?;
         }
         Ok(())
     }
