@@ -556,13 +556,15 @@ impl EdgeCensus {
         self.next += n as u64;
         let open = (self.next - self.closed) as usize;
         if open > self.rows.len() {
-            // More rows, a power of two; the open ones move to their new
-            // places.
-            let len = open.next_power_of_two().max(1024);
+            // More rows, a power of two, for the next batch too if it is
+            // like this one; the open rows move to their new places.
+            let len = open.max(2 * n + n / 8).next_power_of_two().max(1024);
             let mut rows = vec![EMPTY_ROW; len];
-            for r in &self.rows {
-                if (self.closed..self.latest).contains(&(r.tag as u64)) {
-                    rows[r.tag as usize & (len - 1)] = *r;
+            let old = self.rows.len().wrapping_sub(1);
+            for (i, r) in self.rows.iter().enumerate() {
+                let t = r.tag as usize;
+                if (self.closed..self.latest).contains(&(t as u64)) && t & old == i {
+                    rows[t & (len - 1)] = *r;
                 }
             }
             self.rows = rows;
