@@ -192,32 +192,44 @@ pub fn mesh_to_file(
         check_disk(out, &est)?;
     }
     let plan = Plan::classified(tape, grid, &opts)?;
-    let sampled = match (&job.max_volume_loss, trials.last()) {
+    // A mesh the resolution search kept is written as it is (unless asked
+    // to stream).
+    let kept = kept.filter(|_| !job.stream);
+    let stl_while_meshing = !stream && kept.is_none() && crate::write::is_stl(format);
+    let mut sampled = match (&job.max_volume_loss, trials.last()) {
         (None, _) => None,
         (Some(_), Some(t)) if t.resolution == opts.resolution => Some(t.sampled),
+        // Sampled alongside the meshing, below.
+        (Some(_), _) if stl_while_meshing => None,
         (Some(_), _) => Some(sampled_volume(&plan)),
     };
     let total = plan.surface_bricks();
     let progress = |done: usize| progress(done, total);
     // Runs after meshing, before the output is committed.
-    let verdict = |t: &Tally| verdict(shape, &plan, &opts, job, sampled.as_ref(), t);
+    let verdict =
+        |t: &Tally, sampled: Option<&SampledVolume>| verdict(shape, &plan, &opts, job, sampled, t);
     let colour_scale;
-    // A mesh the resolution search kept is written as it is (unless asked
-    // to stream).
-    let kept = kept.filter(|_| !job.stream);
     let mut s = if stream {
         let colour = job.colour.as_ref().map(|c| (shape, c));
         let normals = format.wants_normals();
+        let verdict = |t: &Tally| verdict(t, sampled.as_ref());
         let (t, scale) = stream_mesh_coloured(&plan, out, normals, colour, &progress, &verdict)?;
         colour_scale = scale;
         summary_of(&opts, &plan, &t, None, predicted, true)
-    } else if kept.is_none() && crate::write::is_stl(format) {
+    } else if stl_while_meshing {
         // STL is encoded, measured and on its way to the disk while the
         // mesh is made, and its edges are counted meanwhile; its triangles
-        // are never held whole. Put in place only if the verdict passes
-        // (dropped, the file is removed).
+        // are never held whole. The model's volume is sampled alongside
+        // (it fills the meshing's idle moments). Put in place only if the
+        // verdict passes (dropped, the file is removed).
         colour_scale = None;
-        let (file, m) = crate::write::mesh_to_stl(&plan, out, &progress)?;
+        let sample = job.max_volume_loss.is_some() && sampled.is_none();
+        let (meshed, v) = rayon::join(
+            || crate::write::mesh_to_stl(&plan, out, &progress),
+            || sample.then(|| sampled_volume(&plan)),
+        );
+        sampled = sampled.or(v);
+        let (file, m) = meshed?;
         let t = Tally {
             vertices: m.vertices,
             triangles: m.triangles,
@@ -225,7 +237,7 @@ pub fn mesh_to_file(
             area: m.measured.1,
             bbox: m.bbox,
         };
-        verdict(&t)?;
+        verdict(&t, sampled.as_ref())?;
         let (edges, bad_edges) = match m.edges {
             Some(e) => e,
             // The census relies on the pipeline's order (see
@@ -273,7 +285,7 @@ pub fn mesh_to_file(
             area,
             bbox,
         };
-        verdict(&t)?;
+        verdict(&t, sampled.as_ref())?;
         let file = file?;
         let (committed, (edges, bad_edges)) = std::thread::scope(|sc| {
             let sync = sc.spawn(move || file.commit());

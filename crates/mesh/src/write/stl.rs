@@ -168,7 +168,7 @@ impl<'a> StlJob<'a> {
         let v = &vertices[..];
         let ((), written) = rayon::join(
             || census.triangles(&waiting[*counted..]),
-            || enc.encode(&waiting[..n], |t| corners_of(v, t), &mut **out),
+            || enc.encode(&waiting[..n], |t| corners_of(v, t), out),
         );
         written?;
         waiting.drain(..n);
