@@ -20,7 +20,10 @@
 //! the page cache, and the bytes are on their way while the caller works,
 //! so `commit`'s sync has little left to wait for); a seek or a flush
 //! returns it to buffered writing, and a file system without direct I/O
-//! keeps it buffered throughout. The bytes are the same either way.
+//! keeps it buffered throughout. The bytes are the same either way. A
+//! writer that makes its bytes in large blocks can fill the file's own
+//! buffers in place ([`AtomicFile::lend`], [`AtomicFile::put`]): with
+//! direct I/O they then reach the disk without a single copy.
 
 use crate::{IoError, Result};
 use std::fs::{self, File};
