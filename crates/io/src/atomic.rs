@@ -13,6 +13,17 @@
 //!
 //! Inputs are protected: paths given to [`register_input`] (the model, a
 //! mesh, a scan) cannot be the target of an output of the same run.
+//!
+//! A file that outgrows [`AtomicFile`]'s 4 MiB buffer before any seek or
+//! flush goes on, on Linux, with direct I/O from a writer thread of its
+//! own (`O_DIRECT`: the disk reads aligned staging buffers, no copy into
+//! the page cache, and the bytes are on their way while the caller works,
+//! so `commit`'s sync has little left to wait for); a seek or a flush
+//! returns it to buffered writing, and a file system without direct I/O
+//! keeps it buffered throughout. The bytes are the same either way. A
+//! writer that makes its bytes in large blocks can fill the file's own
+//! buffers in place ([`AtomicFile::lend`], [`AtomicFile::put`]): with
+//! direct I/O they then reach the disk without a single copy.
 
 use crate::{IoError, Result};
 use std::fs::{self, File};
@@ -20,6 +31,9 @@ use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
+
+#[cfg(target_os = "linux")]
+mod direct;
 
 /// Temporaries being written: (owner id, path, is a directory).
 static LIVE: Mutex<Vec<(u64, PathBuf, bool)>> = Mutex::new(Vec::new());
@@ -75,7 +89,7 @@ fn canonical_target(target: &Path) -> Option<PathBuf> {
 /// Refuses a target that is one of the registered inputs.
 pub fn check_not_input(target: &Path) -> Result<()> {
     if let Some(c) = canonical_target(target) {
-        if lock(&INPUTS).iter().any(|i| *i == c) {
+        if lock(&INPUTS).contains(&c) {
             return Err(IoError::WouldOverwriteInput {
                 path: target.to_path_buf(),
             });
@@ -122,13 +136,56 @@ fn remove_all(paths: &[(PathBuf, bool)]) {
 
 /// A file written under a temporary name and renamed onto its target by
 /// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind.
-/// Writes go through a 4 MiB buffer.
+/// Writes go through a 4 MiB buffer; past it, on Linux, straight to the
+/// disk from a writer thread (see the [module docs](self)).
 pub struct AtomicFile {
     target: PathBuf,
     temp: PathBuf,
-    file: Option<BufWriter<File>>,
+    file: Option<Out>,
+    /// Whether the file may still switch to direct writes: nothing has
+    /// reached it yet, and no seek or flush happened.
+    may_go_direct: bool,
+    /// A buffer is lent out ([`AtomicFile::lend`]): nothing may be written.
+    lent: bool,
+    /// The buffer lent out when writing buffered, kept for the next lend.
+    plain: Vec<u8>,
     id: u64,
     scratch: u64,
+}
+
+/// Space for the next bytes of an [`AtomicFile`], lent by
+/// [`AtomicFile::lend`] to be filled in place ([`Lent::bytes`]) and
+/// handed back with [`AtomicFile::put`].
+pub struct Lent {
+    buf: LentBuf,
+    /// Where the caller's bytes start in `buf`.
+    start: usize,
+    len: usize,
+}
+
+enum LentBuf {
+    Plain(Vec<u8>),
+    #[cfg(target_os = "linux")]
+    Stage(direct::Stage),
+}
+
+impl Lent {
+    /// The lent bytes, to be filled (their old contents are unspecified).
+    pub fn bytes(&mut self) -> &mut [u8] {
+        let (start, end) = (self.start, self.start + self.len);
+        match &mut self.buf {
+            LentBuf::Plain(v) => &mut v[start..end],
+            #[cfg(target_os = "linux")]
+            LentBuf::Stage(s) => &mut s.bytes_mut()[start..end],
+        }
+    }
+}
+
+/// Where an [`AtomicFile`]'s bytes go.
+enum Out {
+    Buffered(BufWriter<File>),
+    #[cfg(target_os = "linux")]
+    Direct(direct::Direct),
 }
 
 impl AtomicFile {
@@ -155,7 +212,10 @@ impl AtomicFile {
         Ok(AtomicFile {
             target: target.to_path_buf(),
             temp,
-            file: Some(BufWriter::with_capacity(BUFFER, file)),
+            file: Some(Out::Buffered(BufWriter::with_capacity(BUFFER, file))),
+            may_go_direct: cfg!(target_os = "linux"),
+            lent: false,
+            plain: Vec::new(),
             id,
             scratch: 0,
         })
@@ -164,6 +224,17 @@ impl AtomicFile {
     /// The target this file becomes.
     pub fn target(&self) -> &Path {
         &self.target
+    }
+
+    /// Whether the bytes now go to the disk by direct I/O (see the
+    /// [module docs](self)); false before the first 4 MiB, after a seek or
+    /// a flush, off Linux and on file systems without direct I/O.
+    pub fn writes_direct(&self) -> bool {
+        match &self.file {
+            #[cfg(target_os = "linux")]
+            Some(Out::Direct(_)) => true,
+            _ => false,
+        }
     }
 
     /// A scratch file next to the temporary (for formats assembled from
@@ -184,18 +255,136 @@ impl AtomicFile {
         }
     }
 
-    fn inner(&mut self) -> &mut BufWriter<File> {
-        self.file.as_mut().expect("file is present until commit")
+    /// The buffered writer, after finishing direct writes if they were
+    /// under way (for seeks and flushes, and for a file system refusing
+    /// direct I/O).
+    fn buffered(&mut self) -> std::io::Result<&mut BufWriter<File>> {
+        self.not_lent()?;
+        self.may_go_direct = false;
+        #[cfg(target_os = "linux")]
+        if let Some(Out::Direct(d)) = &mut self.file {
+            let f = d.finish()?;
+            self.file = Some(Out::Buffered(BufWriter::with_capacity(BUFFER, f)));
+        }
+        match self.file.as_mut().expect("file is present until commit") {
+            Out::Buffered(w) => Ok(w),
+            #[cfg(target_os = "linux")]
+            Out::Direct(_) => unreachable!("finished above"),
+        }
+    }
+
+    /// Switches to direct writes when `more` bytes would overflow the
+    /// buffer of a file nothing has reached yet.
+    #[cfg(target_os = "linux")]
+    fn maybe_go_direct(&mut self, more: usize) -> std::io::Result<()> {
+        let Some(Out::Buffered(w)) = &self.file else {
+            return Ok(());
+        };
+        if w.buffer().len() + more <= w.capacity() {
+            return Ok(());
+        }
+        self.may_go_direct = false;
+        let Some(Out::Buffered(w)) = self.file.take() else {
+            unreachable!("matched above")
+        };
+        let (file, pending) = w.into_parts();
+        let pending = pending.unwrap_or_else(|p| p.into_inner());
+        // The buffer has never been flushed, so the file is empty.
+        debug_assert_eq!((&file).stream_position().ok(), Some(0));
+        match direct::Direct::start(file) {
+            Ok(mut d) => {
+                let r = d.write_all(&pending);
+                self.file = Some(Out::Direct(d));
+                r
+            }
+            Err(file) => {
+                let mut w = BufWriter::with_capacity(BUFFER, file);
+                let r = w.write_all(&pending);
+                self.file = Some(Out::Buffered(w));
+                r
+            }
+        }
+    }
+
+    fn not_lent(&self) -> std::io::Result<()> {
+        if self.lent {
+            return Err(std::io::Error::other(
+                "a buffer of the file is lent out (write it back with put)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Lends space for the next `len` bytes of the file, to be filled in
+    /// place and handed back with [`AtomicFile::put`]: for large outputs
+    /// made in blocks. With direct writes the block then goes to the disk
+    /// from where it was made, without a copy; otherwise `put` writes it as
+    /// `write_all` would. Nothing may be written until it is put back (a
+    /// write, seek, flush or commit meanwhile fails).
+    pub fn lend(&mut self, len: usize) -> std::io::Result<Lent> {
+        self.not_lent()?;
+        #[cfg(target_os = "linux")]
+        if self.may_go_direct {
+            self.maybe_go_direct(len)?;
+        }
+        let lent = match self.file.as_mut().expect("file is present until commit") {
+            #[cfg(target_os = "linux")]
+            Out::Direct(d) => {
+                let (stage, start) = d.lend(len)?;
+                Lent {
+                    buf: LentBuf::Stage(stage),
+                    start,
+                    len,
+                }
+            }
+            Out::Buffered(_) => {
+                let mut v = std::mem::take(&mut self.plain);
+                v.resize(len, 0);
+                Lent {
+                    buf: LentBuf::Plain(v),
+                    start: 0,
+                    len,
+                }
+            }
+        };
+        self.lent = true;
+        Ok(lent)
+    }
+
+    /// Writes the bytes of a buffer from [`AtomicFile::lend`].
+    pub fn put(&mut self, lent: Lent) -> std::io::Result<()> {
+        if !self.lent {
+            return Err(std::io::Error::other("put without a lend"));
+        }
+        self.lent = false;
+        let filled = lent.start + lent.len;
+        match (lent.buf, self.file.as_mut().expect("file is present until commit")) {
+            (LentBuf::Plain(v), Out::Buffered(w)) => {
+                let r = w.write_all(&v[..filled]);
+                self.plain = v;
+                r
+            }
+            #[cfg(target_os = "linux")]
+            (LentBuf::Stage(s), Out::Direct(d)) => d.put(s, filled),
+            #[cfg(target_os = "linux")]
+            _ => Err(std::io::Error::other("put of a buffer lent in another mode")),
+        }
     }
 
     /// Flushes, syncs and renames the file onto its target.
     pub fn commit(mut self) -> Result<()> {
-        let Some(w) = self.file.take() else {
+        if let Err(e) = self.not_lent() {
+            return Err(self.err(e));
+        }
+        let Some(out) = self.file.take() else {
             return Ok(());
         };
-        let res = w
-            .into_inner()
-            .map_err(|e| e.into_error())
+        let file = match out {
+            Out::Buffered(w) => w.into_inner().map_err(|e| e.into_error()),
+            #[cfg(target_os = "linux")]
+            Out::Direct(mut d) => d.finish(),
+        };
+        let res = file
             .and_then(|f| f.sync_all())
             .and_then(|_| fs::rename(&self.temp, &self.target));
         res.map_err(|e| self.err(e))?;
@@ -211,24 +400,37 @@ impl AtomicFile {
 
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.inner().write(buf)
+        self.write_all(buf)?;
+        Ok(buf.len())
     }
     fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
-        self.inner().write_all(buf)
+        self.not_lent()?;
+        #[cfg(target_os = "linux")]
+        if self.may_go_direct {
+            self.maybe_go_direct(buf.len())?;
+        }
+        match self.file.as_mut().expect("file is present until commit") {
+            Out::Buffered(w) => w.write_all(buf),
+            #[cfg(target_os = "linux")]
+            Out::Direct(d) => d.write_all(buf),
+        }
     }
+    /// Puts every byte written so far in the file (ending direct writes).
     fn flush(&mut self) -> std::io::Result<()> {
-        self.inner().flush()
+        self.buffered()?.flush()
     }
 }
 
 impl Seek for AtomicFile {
     fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
-        self.inner().seek(pos)
+        self.buffered()?.seek(pos)
     }
 }
 
 impl Drop for AtomicFile {
     fn drop(&mut self) {
+        // Dropping the writer first: a direct writer's thread is joined
+        // before its file is removed.
         if self.file.take().is_some() {
             remove_all(&unregister(self.id));
         }
@@ -390,6 +592,136 @@ mod tests {
             AtomicDir::create(&sub),
             Err(IoError::Exists { .. })
         ));
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Bytes of a pattern with no period near a page or a staging buffer.
+    fn pattern(n: usize) -> Vec<u8> {
+        (0..n as u64)
+            .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+            .collect()
+    }
+
+    /// Whether this platform and file system should take the direct path.
+    fn expect_direct(d: &Path) -> bool {
+        #[cfg(target_os = "linux")]
+        return direct::supported_in(d);
+        #[cfg(not(target_os = "linux"))]
+        {
+            let _ = d;
+            false
+        }
+    }
+
+    #[test]
+    fn large_files_written_direct_have_exactly_the_bytes_written() {
+        let d = dir("direct");
+        // Sizes around the buffer, a staging buffer and a page, so the
+        // switch, full and partial stages and the unaligned tail all occur.
+        for (k, n) in [(4 << 20) + 1, (12 << 20) + 4096, (21 << 20) + 777, 3 << 20]
+            .into_iter()
+            .enumerate()
+        {
+            let want = pattern(n);
+            let t = d.join(format!("m{k}.bin"));
+            let mut f = AtomicFile::create(&t).unwrap();
+            // Writes of odd sizes, some larger than the buffer.
+            let mut at = 0;
+            let mut step = 1000;
+            while at < n {
+                let e = (at + step).min(n);
+                f.write_all(&want[at..e]).unwrap();
+                at = e;
+                step = step * 3 % 9_000_001 + 1;
+            }
+            assert_eq!(f.writes_direct(), n > BUFFER && expect_direct(&d), "{n}");
+            // Not visible before the commit, whatever the path.
+            assert!(!t.exists());
+            f.commit().unwrap();
+            assert!(fs::read(&t).unwrap() == want, "size {n}");
+        }
+        assert_eq!(entries(&d).len(), 4, "{:?}", entries(&d));
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_seek_after_direct_writes_patches_the_file_and_a_drop_leaves_nothing() {
+        let d = dir("direct-seek");
+        let t = d.join("s.stl");
+        let mut want = pattern((9 << 20) + 50);
+        let mut f = AtomicFile::create(&t).unwrap();
+        f.write_all(&want).unwrap();
+        assert_eq!(f.writes_direct(), expect_direct(&d));
+        // Patch a count near the start (as the streaming STL writer does),
+        // then go on appending.
+        f.seek(SeekFrom::Start(80)).unwrap();
+        f.write_all(&[1, 2, 3, 4]).unwrap();
+        assert!(!f.writes_direct());
+        f.seek(SeekFrom::End(0)).unwrap();
+        f.write_all(b"tail").unwrap();
+        want[80..84].copy_from_slice(&[1, 2, 3, 4]);
+        want.extend_from_slice(b"tail");
+        f.commit().unwrap();
+        assert!(fs::read(&t).unwrap() == want);
+        // Dropped in the middle of direct writes: no temporary remains and
+        // the committed file is untouched.
+        {
+            let mut f = AtomicFile::create(&t).unwrap();
+            f.write_all(&pattern(11 << 20)).unwrap();
+            assert_eq!(f.writes_direct(), expect_direct(&d));
+            assert_eq!(entries(&d).len(), 2);
+        }
+        assert_eq!(entries(&d), vec!["s.stl".to_string()]);
+        assert!(fs::read(&t).unwrap() == want);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn blocks_filled_in_place_land_where_written_ones_would() {
+        let d = dir("lend");
+        let n = (30 << 20) + 1234;
+        let want = pattern(n);
+        let t = d.join("l.stl");
+        let mut f = AtomicFile::create(&t).unwrap();
+        // A header, then blocks lent and written alternately, small and
+        // larger than a staging buffer, before and after the switch to
+        // direct writes.
+        let sizes = [84, 1000, 3 << 20, 50, 13 << 20, 4096, 7 << 20, 999_999];
+        let (mut at, mut k) = (0, 0);
+        while at < n {
+            let e = (at + sizes[k % sizes.len()]).min(n);
+            if k % 2 == 0 {
+                f.write_all(&want[at..e]).unwrap();
+            } else {
+                let mut l = f.lend(e - at).unwrap();
+                assert_eq!(l.bytes().len(), e - at);
+                // Nothing else while it is out.
+                assert!(f.write_all(b"x").is_err());
+                assert!(f.lend(1).is_err());
+                assert!(f.flush().is_err());
+                l.bytes().copy_from_slice(&want[at..e]);
+                f.put(l).unwrap();
+            }
+            at = e;
+            k += 1;
+        }
+        assert_eq!(f.writes_direct(), expect_direct(&d));
+        assert!(f.put(Lent {
+            buf: LentBuf::Plain(Vec::new()),
+            start: 0,
+            len: 0
+        })
+        .is_err());
+        f.commit().unwrap();
+        assert!(fs::read(&t).unwrap() == want);
+        // A file committed with a buffer still lent out fails and leaves
+        // nothing new.
+        let u = d.join("u.stl");
+        let mut f = AtomicFile::create(&u).unwrap();
+        f.write_all(&pattern(5 << 20)).unwrap();
+        let _l = f.lend(100).unwrap();
+        assert!(f.commit().is_err());
+        assert_eq!(entries(&d), vec!["l.stl".to_string()]);
         fs::remove_dir_all(&d).unwrap();
     }
 

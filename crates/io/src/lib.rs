@@ -4,7 +4,8 @@
 //!   unique temporary name next to its target and renamed into place only
 //!   when complete; on an error, a drop, Ctrl-C or SIGTERM the temporary is
 //!   removed ([`atomic::cleanup_all`], called by the CLI's signal handler),
-//!   and an output that would replace one of the run's inputs is refused.
+//!   and an output that would replace one of the run's inputs is refused;
+//!   large files go to the disk by direct I/O (Linux) as they are written.
 //! - [`png`]: the one PNG encoder and decoder (grey 1 and 8 bit, RGB, RGBA).
 //! - [`mod@format`]: output formats behind one trait, chosen by file extension
 //!   from a registry, so that a new format plugs in without touching the

@@ -228,60 +228,464 @@ pub fn edges(mesh: &Mesh) -> (usize, usize) {
     regions
         .par_iter()
         .map_init(
-            || (Vec::<u32>::new(), Vec::<u64>::new()),
-            |(start, sorted), region| {
-                start.clear();
-                start.resize(size + 1, 0);
-                for &e in region.iter() {
-                    start[(e >> 33) as usize + 1] += 1;
-                }
-                for i in 0..size {
-                    start[i + 1] += start[i];
-                }
-                sorted.clear();
-                sorted.resize(region.len(), 0);
-                for &e in region.iter() {
-                    let s = &mut start[(e >> 33) as usize];
-                    sorted[*s as usize] = e;
-                    *s += 1;
-                }
-                // `start[i]` is now the end of vertex i's edges.
-                let (mut e, mut b) = (0usize, 0usize);
-                let mut from = 0usize;
-                for v in 0..size {
-                    let to = start[v] as usize;
-                    let fan = &mut sorted[from..to];
-                    from = to;
-                    if fan.is_empty() {
-                        continue;
-                    }
-                    fan.sort_unstable();
-                    let mut i = 0;
-                    while i < fan.len() {
-                        let hi = (fan[i] >> 1) & 0xffff_ffff;
-                        let mut j = i;
-                        let (mut ups, mut downs) = (0, 0);
-                        while j < fan.len() && (fan[j] >> 1) & 0xffff_ffff == hi {
-                            if fan[j] & 1 == 1 {
-                                ups += 1;
-                            } else {
-                                downs += 1;
-                            }
-                            j += 1;
-                        }
-                        e += 1;
-                        // A repeated corner (upper end = lower end) only
-                        // ever counts as `downs`: never good.
-                        if ups != 1 || downs != 1 {
-                            b += 1;
-                        }
-                        i = j;
-                    }
-                }
-                (e, b)
+            || {
+                (
+                    Vec::<u8>::new(),
+                    Vec::<u64>::new(),
+                    Vec::<u32>::new(),
+                    Vec::<u64>::new(),
+                )
+            },
+            |(len, table, start, sorted), region| {
+                census_by_table(region, size, len, table)
+                    .unwrap_or_else(|| census_by_sort(region, size, start, sorted))
             },
         )
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
+/// Distinct upper ends one vertex's table holds in [`census_by_table`].
+const FAN: usize = 8;
+
+/// Edges and bad edges of one range's entries (see [`edges`]) by a table
+/// of up to [`FAN`] distinct upper ends per lower end, each with its
+/// counts of uses either way: one pass over the entries, no sort. `None`
+/// when a vertex has more upper neighbours than that (the caller then
+/// sorts).
+fn census_by_table(
+    region: &[u64],
+    size: usize,
+    len: &mut Vec<u8>,
+    table: &mut Vec<u64>,
+) -> Option<(usize, usize)> {
+    len.clear();
+    len.resize(size, 0);
+    // Slots need no clearing: only the first `len[v]` of a vertex's are read.
+    table.resize(size * FAN, 0);
+    // Slot = upper end << 8 | uses lower -> upper << 4 | uses upper ->
+    // lower, each count saturating at 15.
+    for &e in region {
+        let v = (e >> 33) as usize;
+        let hi = (e >> 1) & 0xffff_ffff;
+        let one = if e & 1 == 1 { 0x10 } else { 0x01 };
+        let n = len[v] as usize;
+        let fan = &mut table[v * FAN..v * FAN + FAN];
+        match fan[..n].iter().position(|s| s >> 8 == hi) {
+            Some(i) => {
+                let s = &mut fan[i];
+                let c = if one == 0x10 {
+                    (*s >> 4) & 0xf
+                } else {
+                    *s & 0xf
+                };
+                if c < 15 {
+                    *s += one;
+                }
+            }
+            None if n < FAN => {
+                fan[n] = hi << 8 | one;
+                len[v] += 1;
+            }
+            None => return None,
+        }
+    }
+    let (mut e, mut b) = (0usize, 0usize);
+    for (v, &n) in len.iter().enumerate() {
+        for s in &table[v * FAN..v * FAN + n as usize] {
+            e += 1;
+            // Good: once each way. A repeated corner (upper end = lower
+            // end) only ever counts as a use upper -> lower: never good.
+            if s & 0xff != 0x11 {
+                b += 1;
+            }
+        }
+    }
+    Some((e, b))
+}
+
+/// [`census_by_table`] for any range: a counting sort of the entries by
+/// lower end, then each vertex's edges sorted by upper end.
+fn census_by_sort(
+    region: &[u64],
+    size: usize,
+    start: &mut Vec<u32>,
+    sorted: &mut Vec<u64>,
+) -> (usize, usize) {
+    start.clear();
+    start.resize(size + 1, 0);
+    for &e in region.iter() {
+        start[(e >> 33) as usize + 1] += 1;
+    }
+    for i in 0..size {
+        start[i + 1] += start[i];
+    }
+    sorted.clear();
+    sorted.resize(region.len(), 0);
+    for &e in region.iter() {
+        let s = &mut start[(e >> 33) as usize];
+        sorted[*s as usize] = e;
+        *s += 1;
+    }
+    // `start[i]` is now the end of vertex i's edges.
+    let (mut e, mut b) = (0usize, 0usize);
+    let mut from = 0usize;
+    for &to in &start[..size] {
+        let to = to as usize;
+        let fan = &mut sorted[from..to];
+        from = to;
+        if fan.is_empty() {
+            continue;
+        }
+        fan.sort_unstable();
+        let mut i = 0;
+        while i < fan.len() {
+            let hi = (fan[i] >> 1) & 0xffff_ffff;
+            let mut j = i;
+            let (mut ups, mut downs) = (0, 0);
+            while j < fan.len() && (fan[j] >> 1) & 0xffff_ffff == hi {
+                if fan[j] & 1 == 1 {
+                    ups += 1;
+                } else {
+                    downs += 1;
+                }
+                j += 1;
+            }
+            e += 1;
+            // A repeated corner (upper end = lower end) only ever counts
+            // as `downs`: never good.
+            if ups != 1 || downs != 1 {
+                b += 1;
+            }
+            i = j;
+        }
+    }
+    (e, b)
+}
+
+/// Distinct upper neighbours a vertex holds in [`EdgeCensus`]'s table.
+const OPEN_FAN: usize = 8;
+
+/// `Row::len` of a vertex whose edges went to the side list.
+const SPILLED: u8 = u8::MAX;
+
+/// A use lower end -> upper end, and one back, in `Row::uses`.
+const UP: u8 = 0x10;
+const DOWN: u8 = 0x01;
+/// The uses of a good edge: once each way.
+const GOOD: u8 = UP + DOWN;
+
+/// One open vertex of [`EdgeCensus`], half a cache line: its distinct
+/// upper neighbours (as upper minus lower end) and, for each, its uses
+/// either way (`UP` and `DOWN` counts, four bits each, stuck at 15).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Row {
+    keys: [u16; OPEN_FAN],
+    uses: [u8; OPEN_FAN],
+    /// The vertex the row now belongs to; a row of another is empty.
+    tag: u32,
+    len: u8,
+}
+
+const EMPTY_ROW: Row = Row {
+    keys: [0; OPEN_FAN],
+    uses: [0; OPEN_FAN],
+    tag: u32::MAX,
+    len: 0,
+};
+
+/// The edge census of [`edges`], taken while a mesh streams in the order a
+/// [`crate::sink::MeshSink`] receives it: one pass over the triangles as
+/// they come, no buffer of the mesh's edges, and exact:
+/// [`EdgeCensus::finish`] gives the counts of [`edges`], or `None` when
+/// the mesh did not come in the order the census relies on (the caller then
+/// counts with [`edges`], which needs no order).
+///
+/// Every directed edge is recorded at its lower-numbered end, in a table of
+/// the vertices still open: up to eight distinct upper neighbours each
+/// (within 65535 of it), with their counts of uses either way; a vertex
+/// with more, and an edge with ends farther apart, go to a side list that
+/// is sorted at the end. Edges and good edges are counted as the uses come.
+/// It relies on the order in which the meshing pipeline emits a mesh: a
+/// batch of triangles only uses vertices of the last two batches of
+/// vertices. So when a batch of vertices arrives, the vertices before the
+/// previous batch are closed and their rows free for new ones; a triangle
+/// naming a closed vertex as the lower end of an edge (or a vertex not yet
+/// received) makes the census incomplete. The table takes 32 bytes per
+/// open vertex (two batches).
+pub struct EdgeCensus {
+    /// Vertices received.
+    next: u64,
+    /// Vertices below this are closed.
+    closed: u64,
+    /// First vertex of the latest batch (closed when the next one comes).
+    latest: u64,
+    /// Rows of the open vertices, at `vertex & (rows.len() - 1)`.
+    rows: Vec<Row>,
+    /// Edges of spilled vertices and of far ends: (lower, upper, use).
+    side: Vec<(u32, u32, u8)>,
+    /// Distinct edges in the table, and those of them used once each way.
+    edges: u64,
+    good: u64,
+    /// An edge named a closed or unknown vertex.
+    out_of_order: bool,
+}
+
+impl Default for EdgeCensus {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Adds one use (`UP` or `DOWN`) of the edge to the upper neighbour `key`
+/// to `row` (of vertex `tag`); the change to the distinct edges and to the
+/// good ones, or `None`, unchanged, when the row is spilled or full without
+/// the key.
+#[inline(always)]
+fn add(row: &mut Row, tag: u32, key: u16, one: u8) -> Option<(u64, i64)> {
+    if row.tag != tag {
+        row.tag = tag;
+        row.len = 0;
+    }
+    let n = row.len as usize;
+    if n > OPEN_FAN {
+        return None;
+    }
+    let mut hit = 0u32;
+    for (i, &k) in row.keys.iter().enumerate() {
+        hit |= ((k == key) as u32) << i;
+    }
+    // Only the first `n` keys are the vertex's (the rest are stale).
+    hit &= (1u32 << n) - 1;
+    if hit == 0 && n == OPEN_FAN {
+        return None;
+    }
+    let found = hit != 0;
+    let i = if found {
+        hit.trailing_zeros() as usize
+    } else {
+        n
+    };
+    row.keys[i] = key;
+    let u = if found { row.uses[i] } else { 0 };
+    // Counts stick at 15 (never good again).
+    let stuck = if one == UP {
+        u >= 0xf0
+    } else {
+        u & 0x0f == 0x0f
+    };
+    let v = if stuck { u } else { u + one };
+    row.uses[i] = v;
+    row.len = (n + !found as usize) as u8;
+    Some((!found as u64, (v == GOOD) as i64 - (u == GOOD) as i64))
+}
+
+/// [`add`] for two uses of one row, to two different keys: both or (the
+/// row unchanged) neither.
+#[inline(always)]
+fn add2(row: &mut Row, tag: u32, uses: [(u16, u8); 2]) -> Option<(u64, i64)> {
+    if row.tag != tag {
+        row.tag = tag;
+        row.len = 0;
+    }
+    let n = row.len as usize;
+    if n > OPEN_FAN - 2 {
+        // Spilled, or maybe too full for both: one at a time.
+        let mut copy = *row;
+        let a = add(&mut copy, tag, uses[0].0, uses[0].1)?;
+        let b = add(&mut copy, tag, uses[1].0, uses[1].1)?;
+        *row = copy;
+        return Some((a.0 + b.0, a.1 + b.1));
+    }
+    let (mut h0, mut h1) = (0u32, 0u32);
+    for (i, &k) in row.keys.iter().enumerate() {
+        h0 |= ((k == uses[0].0) as u32) << i;
+        h1 |= ((k == uses[1].0) as u32) << i;
+    }
+    let valid = (1u32 << n) - 1;
+    let (h0, h1) = (h0 & valid, h1 & valid);
+    let i0 = if h0 != 0 {
+        h0.trailing_zeros() as usize
+    } else {
+        n
+    };
+    let n1 = n + (h0 == 0) as usize;
+    let i1 = if h1 != 0 {
+        h1.trailing_zeros() as usize
+    } else {
+        n1
+    };
+    let mut g = 0i64;
+    for (i, found, (key, one)) in [(i0, h0 != 0, uses[0]), (i1, h1 != 0, uses[1])] {
+        row.keys[i] = key;
+        let u = if found { row.uses[i] } else { 0 };
+        let stuck = if one == UP {
+            u >= 0xf0
+        } else {
+            u & 0x0f == 0x0f
+        };
+        let v = if stuck { u } else { u + one };
+        row.uses[i] = v;
+        g += (v == GOOD) as i64 - (u == GOOD) as i64;
+    }
+    row.len = (n1 + (h1 == 0) as usize) as u8;
+    Some(((h0 == 0) as u64 + (h1 == 0) as u64, g))
+}
+
+impl EdgeCensus {
+    /// An empty census.
+    pub fn new() -> Self {
+        EdgeCensus {
+            next: 0,
+            closed: 0,
+            latest: 0,
+            rows: Vec::new(),
+            side: Vec::new(),
+            edges: 0,
+            good: 0,
+            out_of_order: false,
+        }
+    }
+
+    /// The next `n` vertices arrive (one batch, as
+    /// [`crate::sink::MeshSink::vertices`] receives them); the vertices
+    /// before the previous batch are closed.
+    pub fn vertices(&mut self, n: usize) {
+        self.closed = self.latest;
+        self.latest = self.next;
+        self.next += n as u64;
+        let open = (self.next - self.closed) as usize;
+        if open > self.rows.len() {
+            // More rows, a power of two, for the next batch too if it is
+            // like this one; the open rows move to their new places.
+            let len = open.max(2 * n + n / 8).next_power_of_two().max(1024);
+            let mut rows = vec![EMPTY_ROW; len];
+            let old = self.rows.len().wrapping_sub(1);
+            for (i, r) in self.rows.iter().enumerate() {
+                let t = r.tag as usize;
+                if (self.closed..self.latest).contains(&(t as u64)) && t & old == i {
+                    rows[t & (len - 1)] = *r;
+                }
+            }
+            self.rows = rows;
+        }
+    }
+
+    /// The next triangles, in the order they arrive.
+    pub fn triangles(&mut self, t: &[[u32; 3]]) {
+        if self.rows.is_empty() {
+            self.out_of_order |= !t.is_empty();
+            return;
+        }
+        let mask = self.rows.len() - 1;
+        let (closed, next) = (self.closed, self.next);
+        let (mut edges, mut good) = (0u64, 0i64);
+        for tri in t {
+            // Corners sorted, x < y < z, and whether a -> b -> c runs
+            // x -> y -> z (even) or x -> z -> y (odd). x holds the edges to
+            // y and to z, y the edge to z.
+            let [a, b, c] = *tri;
+            let (mut x, mut y, mut z) = (a, b, c);
+            let mut odd = false;
+            if x > y {
+                (x, y) = (y, x);
+                odd = !odd;
+            }
+            if y > z {
+                (y, z) = (z, y);
+                odd = !odd;
+            }
+            if x > y {
+                (x, y) = (y, x);
+                odd = !odd;
+            }
+            // Rare: a repeated corner, out of order, ends far apart.
+            if x == y || y == z || (x as u64) < closed || z as u64 >= next || z - x > 0xffff {
+                for (p, q) in [(a, b), (b, c), (c, a)] {
+                    self.edge(p.min(q), p.max(q), if p < q { UP } else { DOWN });
+                }
+                continue;
+            }
+            // Even: x -> y, y -> z, z -> x; odd: the other way round.
+            let (fwd, back) = if odd { (DOWN, UP) } else { (UP, DOWN) };
+            let (ky, kz) = ((y - x) as u16, (z - x) as u16);
+            match add2(
+                &mut self.rows[x as usize & mask],
+                x,
+                [(ky, fwd), (kz, back)],
+            ) {
+                Some((e, g)) => {
+                    edges += e;
+                    good += g;
+                }
+                None => {
+                    self.edge(x, y, fwd);
+                    self.edge(x, z, back);
+                }
+            }
+            match add(&mut self.rows[y as usize & mask], y, (z - y) as u16, fwd) {
+                Some((e, g)) => {
+                    edges += e;
+                    good += g;
+                }
+                None => self.edge(y, z, fwd),
+            }
+        }
+        self.edges += edges;
+        self.good = (self.good as i64 + good) as u64;
+    }
+
+    /// One use of the edge from `lo` to `hi` through every check.
+    #[cold]
+    fn edge(&mut self, lo: u32, hi: u32, one: u8) {
+        if (lo as u64) < self.closed || hi as u64 >= self.next {
+            self.out_of_order = true;
+            return;
+        }
+        let r = lo as usize & (self.rows.len() - 1);
+        let spilled = self.rows[r].tag == lo && self.rows[r].len == SPILLED;
+        // Ends far apart (every use of such an edge has them, so all go to
+        // the side list) or a spilled vertex.
+        if hi - lo > 0xffff || spilled {
+            self.side.push((lo, hi, one));
+            return;
+        }
+        if let Some((e, g)) = add(&mut self.rows[r], lo, (hi - lo) as u16, one) {
+            self.edges += e;
+            self.good = (self.good as i64 + g) as u64;
+            return;
+        }
+        // Full: the vertex's uses move to the side list.
+        let row = self.rows[r];
+        for (&key, &u) in row.keys.iter().zip(&row.uses) {
+            let up = (u >> 4, UP);
+            let down = (u & 0x0f, DOWN);
+            for (times, what) in [up, down] {
+                for _ in 0..times {
+                    self.side.push((lo, lo + key as u32, what));
+                }
+            }
+            self.edges -= 1;
+            self.good -= (u == GOOD) as u64;
+        }
+        self.rows[r].len = SPILLED;
+        self.side.push((lo, hi, one));
+    }
+
+    /// Undirected edges and bad edges, as [`edges`] counts them; `None`
+    /// when a triangle named a vertex already closed or not yet received.
+    pub fn finish(mut self) -> Option<(usize, usize)> {
+        if self.out_of_order {
+            return None;
+        }
+        self.side.sort_unstable();
+        for run in self.side.chunk_by(|p, q| (p.0, p.1) == (q.0, q.1)) {
+            let ups = run.iter().filter(|u| u.2 == UP).count();
+            self.edges += 1;
+            self.good += (ups == 1 && run.len() == 2) as u64;
+        }
+        Some((self.edges as usize, (self.edges - self.good) as usize))
+    }
 }
 
 /// The full check: [`summary`]'s figures plus degenerate and duplicate
@@ -454,12 +858,10 @@ mod tests {
         (e, b)
     }
 
-    #[test]
-    fn edge_census_matches_the_definition_across_vertex_ranges() {
-        // 5000 tetrahedra with scrambled vertex numbers (20000 vertices:
-        // several ranges of the census, edges between them), some faces
-        // flipped, dropped, doubled or degenerate.
-        let n = 5000u32;
+    /// `n` tetrahedra with scrambled vertex numbers (`4 n` vertices, so
+    /// several ranges of the census and edges between them), some faces
+    /// flipped, dropped, doubled or degenerate.
+    fn scrambled(n: u32) -> Mesh {
         let nv = 4 * n;
         let perm = |i: u32| ((i as u64 * 7919 + 13) % nv as u64) as u32;
         let mut m = Mesh {
@@ -485,6 +887,13 @@ mod tests {
             }
             m.triangles.extend(faces);
         }
+        m
+    }
+
+    #[test]
+    fn edge_census_matches_the_definition_across_vertex_ranges() {
+        let n = 5000;
+        let m = scrambled(n);
         let got = edges(&m);
         assert_eq!(got, edges_by_map(&m));
         // Closed tetrahedra (k % 7 in 0, 5, 6) have no bad edges; each
@@ -492,6 +901,155 @@ mod tests {
         // corner, its self-loop and the two edges it doubles.
         assert!(got.1 > 0 && got.0 > 6 * n as usize);
         assert_eq!(edges(&tetra()), (6, 0));
+        // A vertex with more upper neighbours than a range's table holds
+        // (a fan of 20 triangles around vertex 0) takes the sorting path.
+        let mut fan = Mesh {
+            vertices: vec![[0.0; 3]; 22],
+            triangles: (1..21).map(|i| [0, i, i + 1]).collect(),
+        };
+        fan.triangles.push([0, 21, 1]);
+        fan.triangles.push([0, 21, 1]);
+        assert_eq!(edges(&fan), edges_by_map(&fan));
+    }
+
+    /// The census of `m` given all its vertices as one batch, then its
+    /// triangles in `parts` pieces.
+    fn census_in_one_batch(m: &Mesh, parts: usize) -> Option<(usize, usize)> {
+        let mut c = EdgeCensus::new();
+        c.vertices(m.vertices.len());
+        let per = m.triangles.len().div_ceil(parts.max(1)).max(1);
+        for t in m.triangles.chunks(per) {
+            c.triangles(t);
+        }
+        c.finish()
+    }
+
+    #[test]
+    fn streamed_census_matches_the_definition() {
+        // Defects of every kind, ends up to 20000 apart.
+        let m = scrambled(5000);
+        assert_eq!(census_in_one_batch(&m, 7), Some(edges_by_map(&m)));
+        assert_eq!(census_in_one_batch(&tetra(), 1), Some((6, 0)));
+        // A fan of 20 triangles around vertex 0: more upper neighbours
+        // than a row holds (the side list), one edge doubled.
+        let mut fan = Mesh {
+            vertices: vec![[0.0; 3]; 22],
+            triangles: (1..21).map(|i| [0, i, i + 1]).collect(),
+        };
+        fan.triangles.push([0, 21, 1]);
+        fan.triangles.push([0, 21, 1]);
+        assert_eq!(census_in_one_batch(&fan, 3), Some(edges_by_map(&fan)));
+        // Ends more than 65535 apart (the side list), and an edge used 40
+        // times one way and 20 the other (counts stuck at 15: bad).
+        let mut far = tetra();
+        far.vertices.resize(100_000, [0.0; 3]);
+        far.triangles.extend([[0, 99_999, 1], [1, 99_999, 0]]);
+        for _ in 0..20 {
+            far.triangles.extend([[2, 3, 50], [2, 3, 51], [3, 2, 52]]);
+        }
+        // Repeated corners at vertices with other upper neighbours, before
+        // and after them, near and far (whatever slots their keys take).
+        for k in 0..40u32 {
+            let v = 100 + 200 * k;
+            far.triangles.push([v, v, v + 1 + k]);
+            far.triangles.push([v, v + 1 + k, v + 2 + 2 * k]);
+            far.triangles.push([v + 2 + 2 * k, v + 1 + k, v]);
+            far.triangles.push([v, v + 3 + 3 * k, v]);
+        }
+        let want = edges_by_map(&far);
+        assert!(want.1 > 0);
+        assert_eq!(census_in_one_batch(&far, 5), Some(want));
+        assert_eq!(census_in_one_batch(&Mesh::default(), 1), Some((0, 0)));
+    }
+
+    #[test]
+    fn streamed_census_counts_meshes_as_the_pipeline_emits_them() {
+        // A sink that keeps the mesh and takes the census as it comes.
+        #[derive(Default)]
+        struct Both {
+            mesh: Mesh,
+            census: EdgeCensus,
+        }
+        impl crate::sink::MeshSink for Both {
+            fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), crate::MeshError> {
+                self.census.vertices(v.len());
+                self.mesh.vertices.extend_from_slice(v);
+                Ok(())
+            }
+            fn triangles(
+                &mut self,
+                t: &[[u32; 3]],
+                _: &crate::sink::VertexWindow,
+            ) -> Result<(), crate::MeshError> {
+                self.census.triangles(t);
+                self.mesh.triangles.extend_from_slice(t);
+                Ok(())
+            }
+        }
+        use microfrep_core::{Expr, Shape};
+        use microfrep_shapes as prims;
+        let p = Expr::xyz();
+        // Two balls (one through the box's face), small bricks: many
+        // slabs, so many batches and closed vertices.
+        let a = prims::sphere(&p, &prims::v3([0.1, 0.0, -0.2]), 0.7);
+        let b = prims::sphere(&p, &prims::v3([0.6, 0.5, 0.9]), 0.35);
+        let shape = Shape::new(a.max(&b));
+        for (cells, brick) in [(60, 8), (33, 4), (40, 32)] {
+            let mut o = crate::MeshOptions::new([[-1.0; 3], [1.0; 3]], cells);
+            o.brick = brick;
+            let plan = crate::Plan::new(&shape, &o).unwrap();
+            let mut b = Both::default();
+            plan.run_into(&mut b, &|_| {}).unwrap();
+            let want = edges(&b.mesh);
+            assert_eq!(want.1, 0);
+            assert_eq!(
+                b.census.finish(),
+                Some(want),
+                "{cells} cells, bricks of {brick}"
+            );
+        }
+    }
+
+    #[test]
+    fn streamed_census_knows_when_the_order_does_not_hold() {
+        let t = tetra();
+        let mut c = EdgeCensus::new();
+        c.vertices(4);
+        c.triangles(&t.triangles);
+        c.vertices(4);
+        c.vertices(4);
+        // Vertices 0..4 are closed now.
+        c.triangles(&[[0, 8, 9]]);
+        assert_eq!(c.finish(), None);
+        // A vertex not received yet.
+        let mut c = EdgeCensus::new();
+        c.vertices(3);
+        c.triangles(&t.triangles);
+        assert_eq!(c.finish(), None);
+        // Triangles before any vertex.
+        let mut c = EdgeCensus::new();
+        c.triangles(&t.triangles);
+        assert_eq!(c.finish(), None);
+        // In order across batches, rows growing: exact.
+        let mut c = EdgeCensus::new();
+        let mut all = Mesh::default();
+        for k in 0..6u32 {
+            let n = 4 * (k as usize + 1) * 500;
+            let base = all.vertices.len() as u32;
+            c.vertices(n);
+            all.vertices.resize(base as usize + n, [0.0; 3]);
+            let tris: Vec<[u32; 3]> = (0..n as u32 / 4)
+                .flat_map(|j| {
+                    tetra()
+                        .triangles
+                        .into_iter()
+                        .map(move |t| t.map(|v| base + 4 * j + v))
+                })
+                .collect();
+            c.triangles(&tris);
+            all.triangles.extend(tris);
+        }
+        assert_eq!(c.finish(), Some(edges_by_map(&all)));
     }
 
     #[test]

@@ -7,7 +7,11 @@
 //! included) against what the process may really use
 //! ([`microfrep_io::limits::memory_limit`]: RAM, cgroup, `RLIMIT_AS`);
 //! STL and PLY are streamed to disk when the mesh would not fit (or when
-//! asked), after a check of the free disk. After meshing, and before the
+//! asked), after a check of the free disk. Otherwise an STL is still
+//! encoded, measured and sent to the disk while the mesh is made, its
+//! edges counted meanwhile ([`crate::check::EdgeCensus`]): the same bytes
+//! and figures as meshing into memory first, in little more than the
+//! meshing's time. After meshing, and before the
 //! output appears, the mesh is refused when it is empty (with the reason)
 //! or when it lost more volume than [`JobOptions::max_volume_loss`] against
 //! the model's own sampled volume ([`crate::sampled`]): features thinner
@@ -188,26 +192,66 @@ pub fn mesh_to_file(
         check_disk(out, &est)?;
     }
     let plan = Plan::classified(tape, grid, &opts)?;
-    let sampled = match (&job.max_volume_loss, trials.last()) {
+    // A mesh the resolution search kept is written as it is (unless asked
+    // to stream).
+    let kept = kept.filter(|_| !job.stream);
+    let stl_while_meshing = !stream && kept.is_none() && crate::write::is_stl(format);
+    let mut sampled = match (&job.max_volume_loss, trials.last()) {
         (None, _) => None,
         (Some(_), Some(t)) if t.resolution == opts.resolution => Some(t.sampled),
+        // Sampled alongside the meshing, below.
+        (Some(_), _) if stl_while_meshing => None,
         (Some(_), _) => Some(sampled_volume(&plan)),
     };
     let total = plan.surface_bricks();
     let progress = |done: usize| progress(done, total);
     // Runs after meshing, before the output is committed.
-    let verdict = |t: &Tally| verdict(shape, &plan, &opts, job, sampled.as_ref(), t);
+    let verdict =
+        |t: &Tally, sampled: Option<&SampledVolume>| verdict(shape, &plan, &opts, job, sampled, t);
     let colour_scale;
     let mut s = if stream {
         let colour = job.colour.as_ref().map(|c| (shape, c));
         let normals = format.wants_normals();
+        let verdict = |t: &Tally| verdict(t, sampled.as_ref());
         let (t, scale) = stream_mesh_coloured(&plan, out, normals, colour, &progress, &verdict)?;
         colour_scale = scale;
         summary_of(&opts, &plan, &t, None, predicted, true)
+    } else if stl_while_meshing {
+        // STL is encoded, measured and on its way to the disk while the
+        // mesh is made, and its edges are counted meanwhile; its triangles
+        // are never held whole. The model's volume is sampled alongside
+        // (it fills the meshing's idle moments). Put in place only if the
+        // verdict passes (dropped, the file is removed).
+        colour_scale = None;
+        let sample = job.max_volume_loss.is_some() && sampled.is_none();
+        let (meshed, v) = rayon::join(
+            || crate::write::mesh_to_stl(&plan, out, &progress),
+            || sample.then(|| sampled_volume(&plan)),
+        );
+        sampled = sampled.or(v);
+        let (file, m) = meshed?;
+        let t = Tally {
+            vertices: m.vertices,
+            triangles: m.triangles,
+            volume: m.measured.0,
+            area: m.measured.1,
+            bbox: m.bbox,
+        };
+        verdict(&t, sampled.as_ref())?;
+        let (edges, bad_edges) = match m.edges {
+            Some(e) => e,
+            // The census relies on the pipeline's order (see
+            // `check::EdgeCensus`); should that not hold, the mesh is made
+            // again in memory and counted.
+            None => crate::check::edges(&plan.run(&progress)?),
+        };
+        file.commit()?;
+        let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
+        summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
     } else {
         let mesh = match kept {
-            Some(m) if !job.stream => m,
-            _ => plan.run(&progress)?,
+            Some(m) => m,
+            None => plan.run(&progress)?,
         };
         let colours = match &job.colour {
             Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
@@ -241,7 +285,7 @@ pub fn mesh_to_file(
             area,
             bbox,
         };
-        verdict(&t)?;
+        verdict(&t, sampled.as_ref())?;
         let file = file?;
         let (committed, (edges, bad_edges)) = std::thread::scope(|sc| {
             let sync = sc.spawn(move || file.commit());

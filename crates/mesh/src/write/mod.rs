@@ -145,6 +145,34 @@ pub fn write_uncommitted_measured(
     Ok((f, measured))
 }
 
+/// Meshes `plan` straight into `out` as binary STL (see
+/// [`stl::StlJob`]), left uncommitted: the file, and the mesh's counts,
+/// volume, area, bounding box and (where the census could count them as
+/// the mesh came) edges.
+pub(crate) fn mesh_to_stl(
+    plan: &crate::Plan,
+    out: &Path,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(AtomicFile, stl::StlJobSummary), MeshError> {
+    let mut f = AtomicFile::create(out)?;
+    let at = |e: std::io::Error| MeshError::Io {
+        path: out.display().to_string(),
+        source: e,
+    };
+    let mut sink = stl::StlJob::new(&mut f).map_err(at)?;
+    plan.run_into(&mut sink, progress).map_err(|e| match e {
+        MeshError::Stream(e) => at(e),
+        e => e,
+    })?;
+    let collected = sink.finish().map_err(at)?;
+    Ok((f, collected))
+}
+
+/// Whether `format` is binary STL.
+pub(crate) fn is_stl(format: &dyn MeshFormat) -> bool {
+    format.extensions().contains(&"stl")
+}
+
 /// An error unless `format` (of `out`) stores per-vertex colours.
 pub fn check_colours(format: &dyn MeshFormat, out: &Path) -> Result<(), MeshError> {
     if format.stores_colours() {

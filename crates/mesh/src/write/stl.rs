@@ -1,9 +1,13 @@
 //! Binary STL: 50 bytes per triangle with a facet normal from its corners.
-//! Written whole (chunks encoded in parallel) or streamed ([`StlWriter`]:
-//! triangles as they come, the count patched at the end).
+//! Written whole (chunks encoded in parallel, a block of triangles at a
+//! time in vector instructions), streamed ([`StlWriter`]: triangles as
+//! they come, the count patched at the end), or, for a job, written,
+//! measured and edge-counted while the mesh is made (`StlJob`).
 
 use super::{MeshFormat, CHUNK};
-use crate::Mesh;
+use crate::check::EdgeCensus;
+use crate::sink::{MeshSink, VertexWindow};
+use crate::{Mesh, MeshError};
 use microfrep_io::{AtomicFile, OutputFormat};
 use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
@@ -45,50 +49,196 @@ impl MeshFormat for Stl {
         let n = count(mesh.triangles.len() as u64)?;
         out.write_all(&header())?;
         out.write_all(&n.to_le_bytes())?;
-        // Records straight into reused buffers of two encoding chunks
-        // (larger than the file's write buffer, so they bypass it); the
-        // volume and area summed per chunk and then over the chunks in
-        // order, as `check::volume_area` does (same chunks, same
-        // operations).
-        let block = 2 * CHUNK;
+        let mut enc = Encoder::default();
+        let v = &mesh.vertices;
+        enc.encode(&mesh.triangles, |t| corners_of(v, t), out)?;
+        Ok(Some(enc.total()))
+    }
+}
+
+/// Encodes triangles into STL records in parallel, straight into the
+/// file's own buffers ([`AtomicFile::lend`]: with direct writes the disk
+/// reads them from there, no copy), with the volume and area summed per
+/// chunk of [`CHUNK`] triangles and then over the chunks in order, as
+/// `check::volume_area` does (same chunks, same operations, so the same
+/// bits). Two chunks a thread at a time, so memory stays bounded.
+#[derive(Default)]
+struct Encoder {
+    /// Volume and area per chunk encoded so far.
+    sums: Vec<(f64, f64)>,
+}
+
+impl Encoder {
+    /// Encodes and writes `tris` (their corners by `corners`), which
+    /// continue the triangles encoded before; every call but the last must
+    /// pass whole chunks.
+    fn encode<T: Sync>(
+        &mut self,
+        tris: &[T],
+        corners: impl Fn(&T) -> [[f32; 3]; 3] + Sync,
+        out: &mut AtomicFile,
+    ) -> std::io::Result<()> {
         let per_group = 2 * rayon::current_num_threads().max(1);
-        let mut bufs: Vec<Vec<u8>> = Vec::new();
-        let mut sums = Vec::with_capacity(mesh.triangles.len().div_ceil(CHUNK));
-        for g in mesh.triangles.chunks(block * per_group) {
-            let n = g.len().div_ceil(block);
-            if bufs.len() < n {
-                bufs.resize_with(n, Vec::new);
-            }
-            let s: Vec<Vec<(f64, f64)>> = g
-                .par_chunks(block)
-                .zip(bufs[..n].par_iter_mut())
-                .map(|(ts, b)| {
-                    // Only a shorter last block changes the length.
-                    b.resize(50 * ts.len(), 0);
-                    ts.chunks(CHUNK)
-                        .zip(b.chunks_mut(50 * CHUNK))
-                        .map(|(c, bc)| {
-                            let (mut v, mut a) = (0.0, 0.0);
-                            for (t, rec) in c.iter().zip(bc.chunks_exact_mut(50)) {
-                                let (dv, da) = encode(t.map(|i| mesh.vertices[i as usize]), rec);
-                                v += dv;
-                                a += da;
-                            }
-                            (v, a)
-                        })
-                        .collect()
-                })
+        for g in tris.chunks(CHUNK * per_group) {
+            let mut lent = out.lend(50 * g.len())?;
+            let s: Vec<(f64, f64)> = g
+                .par_chunks(CHUNK)
+                .zip(lent.bytes().par_chunks_mut(50 * CHUNK))
+                .map(|(c, b)| encode_all(c, &corners, b))
                 .collect();
-            sums.extend(s.into_iter().flatten());
-            for b in &bufs[..n] {
-                out.write_all(b)?;
+            self.sums.extend(s);
+            out.put(lent)?;
+        }
+        Ok(())
+    }
+
+    /// Volume and area of everything encoded.
+    fn total(&self) -> (f64, f64) {
+        self.sums
+            .iter()
+            .fold((0.0, 0.0), |(v, a), (dv, da)| (v + dv, a + da))
+    }
+}
+
+/// A [`MeshSink`] that writes the mesh to `out` as binary STL and counts
+/// its edges while it arrives, holding its vertices but not its triangles:
+/// those are kept until a few chunks have come, then encoded in parallel
+/// (so the file is on its way to the disk while the rest is meshed), and
+/// the edges are counted alongside ([`crate::check::EdgeCensus`]). The
+/// bytes are those of [`super::write_mesh`]; [`StlJob::finish`] returns
+/// the counts, the volume and area measured while encoding (bit for bit
+/// those of `check::volume_area`), the bounding box and the edge census.
+pub(crate) struct StlJob<'a> {
+    out: &'a mut AtomicFile,
+    enc: Encoder,
+    vertices: Vec<[f32; 3]>,
+    /// Triangles received and not yet encoded; the first of them is at a
+    /// multiple of [`CHUNK`] until `finish`.
+    waiting: Vec<[u32; 3]>,
+    /// How many of `waiting` the census has seen.
+    counted: usize,
+    census: EdgeCensus,
+    triangles: u64,
+    /// Bounding box of the vertices, in f32 (exact: the same as in f64).
+    bbox: [[f32; 3]; 2],
+}
+
+impl<'a> StlJob<'a> {
+    /// Writes the header (the count is patched by `finish`).
+    pub(crate) fn new(out: &'a mut AtomicFile) -> std::io::Result<Self> {
+        out.write_all(&header())?;
+        out.write_all(&0u32.to_le_bytes())?;
+        Ok(StlJob {
+            out,
+            enc: Encoder::default(),
+            vertices: Vec::new(),
+            waiting: Vec::new(),
+            counted: 0,
+            census: EdgeCensus::new(),
+            triangles: 0,
+            bbox: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
+        })
+    }
+
+    /// Triangles encoded at a time: two chunks a thread.
+    fn step() -> usize {
+        2 * CHUNK * rayon::current_num_threads().max(1)
+    }
+
+    /// Gives the census the triangles it has not seen and encodes the
+    /// waiting ones, side by side: all of them (`all`), or the whole
+    /// chunks among them.
+    fn catch_up(&mut self, all: bool) -> std::io::Result<()> {
+        let n = if all {
+            self.waiting.len()
+        } else {
+            self.waiting.len() / CHUNK * CHUNK
+        };
+        let Self {
+            out,
+            enc,
+            vertices,
+            waiting,
+            counted,
+            census,
+            ..
+        } = self;
+        // Every vertex of a triangle arrives before it (the sink's
+        // contract); a bad index would panic here as in `write_mesh`.
+        let v = &vertices[..];
+        let ((), written) = rayon::join(
+            || census.triangles(&waiting[*counted..]),
+            || enc.encode(&waiting[..n], |t| corners_of(v, t), out),
+        );
+        written?;
+        waiting.drain(..n);
+        *counted = waiting.len();
+        Ok(())
+    }
+
+    /// Encodes the rest and patches the triangle count into the header.
+    pub(crate) fn finish(mut self) -> std::io::Result<StlJobSummary> {
+        let n = count(self.triangles)?;
+        self.catch_up(true)?;
+        self.out.seek(SeekFrom::Start(80))?;
+        self.out.write_all(&n.to_le_bytes())?;
+        self.out.seek(SeekFrom::End(0))?;
+        let [lo, hi] = self.bbox;
+        Ok(StlJobSummary {
+            vertices: self.vertices.len() as u64,
+            triangles: self.triangles,
+            measured: self.enc.total(),
+            bbox: [lo.map(|c| c as f64), hi.map(|c| c as f64)],
+            edges: self.census.finish(),
+        })
+    }
+}
+
+/// What [`StlJob::finish`] returns.
+pub(crate) struct StlJobSummary {
+    pub(crate) vertices: u64,
+    pub(crate) triangles: u64,
+    /// Volume and area.
+    pub(crate) measured: (f64, f64),
+    pub(crate) bbox: [[f64; 3]; 2],
+    /// Edges and bad edges; `None` when the mesh did not come in the order
+    /// the census relies on (count them with [`crate::check::edges`]).
+    pub(crate) edges: Option<(usize, usize)>,
+}
+
+impl MeshSink for StlJob<'_> {
+    fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
+        // The triangles so far go to the census before it closes vertices.
+        if self.counted < self.waiting.len() {
+            self.catch_up(false).map_err(MeshError::Stream)?;
+        }
+        self.census.vertices(v.len());
+        self.vertices.extend_from_slice(v);
+        let [lo, hi] = &mut self.bbox;
+        for p in v {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
             }
         }
-        Ok(Some(
-            sums.into_iter()
-                .fold((0.0, 0.0), |(v, a), (dv, da)| (v + dv, a + da)),
-        ))
+        Ok(())
     }
+
+    fn triangles(&mut self, t: &[[u32; 3]], _: &VertexWindow) -> Result<(), MeshError> {
+        self.waiting.extend_from_slice(t);
+        self.triangles += t.len() as u64;
+        if self.waiting.len() >= Self::step() {
+            self.catch_up(false).map_err(MeshError::Stream)?;
+        }
+        Ok(())
+    }
+}
+
+/// The corners of triangle `t`. (Written out: `[T; 3]::map` was not
+/// inlined here and cost more than the encoding.)
+#[inline(always)]
+fn corners_of(v: &[[f32; 3]], t: &[u32; 3]) -> [[f32; 3]; 3] {
+    [v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]]
 }
 
 fn header() -> [u8; 80] {
@@ -133,16 +283,95 @@ fn encode(t: [[f32; 3]; 3], rec: &mut [u8]) -> (f64, f64) {
         + p[2] * (q[0] * r[1] - q[1] * r[0]))
         / 6.0;
     let n = if len > 0.0 { n.map(|c| c / len) } else { n };
+    put_record(rec, n.map(|c| c as f32), t);
+    (volume, 0.5 * len)
+}
+
+/// Writes one record: normal, corners, attribute count 0.
+#[inline(always)]
+fn put_record(rec: &mut [u8], n: [f32; 3], t: [[f32; 3]; 3]) {
     let mut vals = [0.0f32; 12];
-    vals[..3].copy_from_slice(&n.map(|c| c as f32));
+    vals[..3].copy_from_slice(&n);
     for (k, v) in t.iter().enumerate() {
         vals[3 + 3 * k..6 + 3 * k].copy_from_slice(v);
     }
+    let rec: &mut [u8; 50] = rec.try_into().expect("records are 50 bytes");
     for (k, v) in vals.iter().enumerate() {
         rec[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
     }
     rec[48..50].fill(0);
-    (volume, 0.5 * len)
+}
+
+/// Triangles per block of [`encode_all`]: their arithmetic runs lane by
+/// lane (vectorised), their sums in order.
+const LANES: usize = 16;
+
+/// Writes the records of `tris` (their corners by `corners`) into `out`
+/// (50 bytes each) and returns their volume and area summed in order:
+/// bit for bit what [`encode`] triangle by triangle and
+/// `check::volume_area` give (the same operations on each triangle, the
+/// same order of the sums), but a block of triangles at a time, each step
+/// for all of them, so the compiler can use vector instructions.
+#[inline(always)]
+fn encode_all<T>(tris: &[T], corners: &impl Fn(&T) -> [[f32; 3]; 3], out: &mut [u8]) -> (f64, f64) {
+    let (mut vol, mut area) = (0.0, 0.0);
+    let blocks = tris.chunks_exact(LANES);
+    let rest = blocks.remainder();
+    let mut recs = out.chunks_exact_mut(50 * LANES);
+    // Corner coordinates by lane: c[corner * 3 + axis][lane].
+    let mut c = [[0.0f64; LANES]; 9];
+    let mut t = [[[0.0f32; 3]; 3]; LANES];
+    for (b, rec) in blocks.zip(&mut recs) {
+        for (i, tri) in b.iter().enumerate() {
+            t[i] = corners(tri);
+            for (k, &p) in t[i].iter().enumerate() {
+                c[3 * k][i] = p[0] as f64;
+                c[3 * k + 1][i] = p[1] as f64;
+                c[3 * k + 2][i] = p[2] as f64;
+            }
+        }
+        let [px, py, pz, qx, qy, qz, rx, ry, rz] = &c;
+        let mut nx = [0.0f64; LANES];
+        let mut ny = [0.0f64; LANES];
+        let mut nz = [0.0f64; LANES];
+        let mut len = [0.0f64; LANES];
+        let mut dv = [0.0f64; LANES];
+        for i in 0..LANES {
+            let e1 = [qx[i] - px[i], qy[i] - py[i], qz[i] - pz[i]];
+            let e2 = [rx[i] - px[i], ry[i] - py[i], rz[i] - pz[i]];
+            nx[i] = e1[1] * e2[2] - e1[2] * e2[1];
+            ny[i] = e1[2] * e2[0] - e1[0] * e2[2];
+            nz[i] = e1[0] * e2[1] - e1[1] * e2[0];
+            len[i] = (nx[i] * nx[i] + ny[i] * ny[i] + nz[i] * nz[i]).sqrt();
+            dv[i] = (px[i] * (qy[i] * rz[i] - qz[i] * ry[i])
+                - py[i] * (qx[i] * rz[i] - qz[i] * rx[i])
+                + pz[i] * (qx[i] * ry[i] - qy[i] * rx[i]))
+                / 6.0;
+        }
+        let mut ux = [0.0f32; LANES];
+        let mut uy = [0.0f32; LANES];
+        let mut uz = [0.0f32; LANES];
+        for i in 0..LANES {
+            // A zero normal stays zero (as in `encode`).
+            let l = if len[i] > 0.0 { len[i] } else { 1.0 };
+            ux[i] = (nx[i] / l) as f32;
+            uy[i] = (ny[i] / l) as f32;
+            uz[i] = (nz[i] / l) as f32;
+        }
+        for i in 0..LANES {
+            vol += dv[i];
+            area += 0.5 * len[i];
+        }
+        for (i, r) in rec.chunks_exact_mut(50).enumerate() {
+            put_record(r, [ux[i], uy[i], uz[i]], t[i]);
+        }
+    }
+    for (t, rec) in rest.iter().zip(recs.into_remainder().chunks_exact_mut(50)) {
+        let (dv, da) = encode(corners(t), rec);
+        vol += dv;
+        area += da;
+    }
+    (vol, area)
 }
 
 /// Binary STL written triangle by triangle; [`StlWriter::finish`] patches
@@ -195,8 +424,13 @@ mod tests {
             ((x >> 40) as f32 / (1u64 << 24) as f32) * 10.0 - 5.0
         };
         let vertices: Vec<[f32; 3]> = (0..1000).map(|_| [next(), next(), next()]).collect();
-        let triangles: Vec<[u32; 3]> = (0..150_000u32)
-            .map(|i| [i % 1000, (i * 7 + 1) % 1000, (i * 13 + 5) % 1000])
+        // Some degenerate (a zero normal stays zero), the count not a
+        // multiple of the vector blocks.
+        let triangles: Vec<[u32; 3]> = (0..150_003u32)
+            .map(|i| match i % 997 {
+                0 => [i % 1000, i % 1000, (i * 13 + 5) % 1000],
+                _ => [i % 1000, (i * 7 + 1) % 1000, (i * 13 + 5) % 1000],
+            })
             .collect();
         let mesh = Mesh {
             vertices,
@@ -213,12 +447,13 @@ mod tests {
         let got = got.expect("STL measures");
         assert_eq!(got.0.to_bits(), want.0.to_bits());
         assert_eq!(got.1.to_bits(), want.1.to_bits());
-        // The records are the ones the streaming writer makes.
+        // The records are the ones the streaming writer makes, one
+        // triangle at a time.
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(bytes.len(), 84 + 50 * mesh.triangles.len());
-        for i in [0usize, 65_535, 65_536, 149_999] {
+        for (i, rec) in bytes[84..].chunks_exact(50).enumerate() {
             let t = mesh.triangles[i].map(|v| mesh.vertices[v as usize]);
-            assert_eq!(&bytes[84 + 50 * i..134 + 50 * i], &record(t)[..]);
+            assert_eq!(rec, &record(t)[..], "triangle {i}");
         }
         std::fs::remove_dir_all(&dir).unwrap();
     }
