@@ -8,7 +8,7 @@ use crate::grid::SliceGrid;
 use crate::image::GreyImage;
 use crate::raster::{rasterize, LayerValues};
 use crate::stack::StackFormat;
-use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape};
+use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape, BLOCK};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,8 +20,11 @@ use std::path::Path;
 /// inside the solid are evaluated: tiles with no inside pixel are skipped,
 /// tiles whose interval bounds give one grey level (with a margin far wider
 /// than f32 rounding) are filled, tiles whose intervals decide branches
-/// are evaluated with the exactly simplified tape, and the rest are
-/// sampled at their inside pixels, rows of tiles in parallel.
+/// are evaluated with the exactly simplified tape (the evaluators of a few
+/// such tapes kept per thread), and the inside pixels of the rest join
+/// full blocks of their tape's evaluator, rows of tiles in parallel. Every
+/// grey level is the one f32 evaluation of the whole channel at the pixel
+/// centre gives.
 #[derive(Clone, Debug)]
 pub struct AttributeStack {
     /// The channel.
@@ -30,9 +33,90 @@ pub struct AttributeStack {
     tape: Tape,
 }
 
+/// An evaluator of the channel (or of a tile's shorter tape) with the
+/// inside pixels loaded into its batch and waiting for a full block.
+struct Evals {
+    tape: Tape,
+    batch: BatchEval,
+    interval: IntervalEval,
+    /// Indices into the band's buffer of the `n` pixels loaded so far.
+    idx: Box<[usize; BLOCK]>,
+    n: usize,
+}
+
+impl Evals {
+    fn new(tape: &Tape) -> Evals {
+        Evals {
+            tape: tape.clone(),
+            batch: BatchEval::new(tape),
+            interval: IntervalEval::new(tape),
+            idx: Box::new([0; BLOCK]),
+            n: 0,
+        }
+    }
+
+    /// Evaluates the loaded pixels and stores their grey levels.
+    fn flush(&mut self, rows: &mut [u8]) {
+        let n = std::mem::take(&mut self.n);
+        if n == 0 {
+            return;
+        }
+        let s = self.batch.eval_loaded(n);
+        for (&q, &v) in self.idx[..n].iter().zip(s) {
+            // NaN (undefined) stays 0 like outside: `grey` maps it there.
+            rows[q] = grey(v);
+        }
+    }
+}
+
+/// Whether two tapes made from one tape by simplification are the same
+/// (constants compared by their bits, so NaN constants match).
+fn same_tape(a: &Tape, b: &Tape) -> bool {
+    use microfrep_core::Op;
+    a.outputs() == b.outputs()
+        && a.ops().len() == b.ops().len()
+        && a.ops().iter().zip(b.ops()).all(|(x, y)| match (x, y) {
+            (Op::Const(c), Op::Const(d)) => c.to_bits() == d.to_bits(),
+            _ => x == y,
+        })
+}
+
+/// Simplified tapes kept per thread (with their evaluators, which are
+/// costly to make: tiles of one model mostly decide the same branches).
+const CACHED_TAPES: usize = 8;
+
+/// One thread's evaluators: the channel's (index 0) and those of the
+/// shorter tapes tiles were given, most recently used last.
+struct Worker {
+    evals: Vec<Evals>,
+}
+
+impl Worker {
+    /// The index of the evaluator of `t`, made if new.
+    fn find_or_add(&mut self, t: Tape) -> usize {
+        if let Some(e) = (1..self.evals.len()).find(|&e| same_tape(&self.evals[e].tape, &t)) {
+            return e;
+        }
+        self.evals.push(Evals::new(&t));
+        self.evals.len() - 1
+    }
+
+    /// Flushes every evaluator into `rows`, then drops the oldest shorter
+    /// tapes beyond [`CACHED_TAPES`] (between tiles, so no index held by a
+    /// tile in progress moves).
+    fn finish(&mut self, rows: &mut [u8]) {
+        for e in &mut self.evals {
+            e.flush(rows);
+        }
+        let extra = self.evals.len().saturating_sub(1 + CACHED_TAPES);
+        self.evals.drain(1..1 + extra);
+    }
+}
+
 /// Side of the tiles that bands of rows are cut into.
 const TILE: usize = 64;
-/// Side of the leaves sampled in one batch (16 x 16 = one block).
+/// Side of the leaves sampled together (their inside pixels join the
+/// evaluator's block).
 const LEAF: usize = 16;
 /// Tiles at least this many pixels on a side may get their own tape.
 const SIMPLIFY_TILE: usize = 32;
@@ -44,7 +128,8 @@ const SIMPLIFY_TILE: usize = 32;
 /// spanned very few; with 8 the Bezier cube's leaves were bounded in vain).
 const CLOSE_LEVELS: u8 = 2;
 
-/// Grey level of attribute value `s`: `round(255 clamp(s, 0, 1))`.
+/// Grey level of attribute value `s`: `round(255 clamp(s, 0, 1))`, 0 for
+/// NaN.
 fn grey(s: f32) -> u8 {
     (255.0 * s.clamp(0.0, 1.0)).round() as u8
 }
@@ -58,23 +143,6 @@ fn uniform_grey(b: Interval) -> Option<u8> {
     let m = 1e-4 * b.lo.abs().max(b.hi.abs()).max(1.0);
     let (lo, hi) = (grey((b.lo - m) as f32), grey((b.hi + m) as f32));
     (lo == hi).then_some(lo)
-}
-
-/// Per-thread evaluators of the channel (or of a tile's shorter tape).
-struct Evals {
-    tape: Tape,
-    batch: BatchEval,
-    interval: IntervalEval,
-}
-
-impl Evals {
-    fn new(tape: &Tape) -> Evals {
-        Evals {
-            tape: tape.clone(),
-            batch: BatchEval::new(tape),
-            interval: IntervalEval::new(tape),
-        }
-    }
 }
 
 impl AttributeStack {
@@ -122,22 +190,28 @@ impl AttributeStack {
             }
             out
         };
+        // The pixel centres as the reference gives them to the evaluator.
+        let xs: Vec<f32> = (0..nx).map(|i| grid.x(i) as f32).collect();
         let z = layer.z;
         bands.into_par_iter().for_each_init(
-            || Evals::new(&self.tape),
-            |ev, (j0, rows)| {
+            || Worker {
+                evals: vec![Evals::new(&self.tape)],
+            },
+            |w, (j0, rows)| {
                 let h = rows.len() / nx;
                 let band = Band {
                     grid,
                     layer,
                     z,
+                    xs: &xs,
                     j0,
                     h,
                 };
                 for i0 in (0..nx).step_by(TILE) {
-                    let w = TILE.min(nx - i0);
-                    band.tile(ev, rows, [i0, j0], [w, h], true);
+                    let tw = TILE.min(nx - i0);
+                    band.tile(w, 0, rows, [i0, j0], [tw, h], true);
                 }
+                w.finish(rows);
             },
         );
         pixels
@@ -149,113 +223,134 @@ struct Band<'a> {
     grid: &'a SliceGrid,
     layer: &'a LayerValues,
     z: f64,
+    /// x of each pixel column's centre, in f32.
+    xs: &'a [f32],
     /// First image row (from the bottom) and row count of the band.
     j0: usize,
     h: usize,
 }
 
 impl Band<'_> {
-    /// Index into the band's buffer of pixel `(i, j)` (image row j).
-    fn at(&self, i: usize, j: usize) -> usize {
-        (self.j0 + self.h - 1 - j) * self.grid.nx + i
+    /// Index into the band's buffer of the start of image row j.
+    fn row(&self, j: usize) -> usize {
+        (self.j0 + self.h - 1 - j) * self.grid.nx
     }
 
-    /// Fills the tile at pixel `at` of size `size`. Small tiles are bounded
-    /// only when `close`: their parent's bounds spanned few grey levels.
-    fn tile(&self, ev: &mut Evals, rows: &mut [u8], at: [usize; 2], size: [usize; 2], close: bool) {
-        let (grid, layer) = (self.grid, self.layer);
+    /// The layer's values of row `j` over columns `cols`.
+    fn values(&self, j: usize, cols: std::ops::Range<usize>) -> &[f32] {
+        let r = j * self.grid.nx;
+        &self.layer.values[r + cols.start..r + cols.end]
+    }
+
+    /// Fills the tile at pixel `at` of size `size` with evaluator `e` of
+    /// `w`. Small tiles are bounded only when `close`: their parent's
+    /// bounds spanned few grey levels.
+    #[allow(clippy::too_many_arguments)]
+    fn tile(
+        &self,
+        w: &mut Worker,
+        e: usize,
+        rows: &mut [u8],
+        at: [usize; 2],
+        size: [usize; 2],
+        close: bool,
+    ) {
         let cols = at[0]..at[0] + size[0];
         // Stops at the first inside pixel (most tiles of a solid's interior
         // have one at their corner), so tiles are not counted at every level.
-        let any_inside = (at[1]..at[1] + size[1]).any(|j| cols.clone().any(|i| layer.inside(i, j)));
+        let any_inside = (at[1]..at[1] + size[1])
+            .any(|j| self.values(j, cols.clone()).iter().any(|&v| v >= 0.0));
         if !any_inside {
             return;
         }
         let big = size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE;
         if !(big || close) {
-            return self.split_or_sample(ev, rows, at, size, false);
+            return self.split_or_sample(w, e, rows, at, size, false);
         }
+        let grid = self.grid;
         // The pixel centres' extent, as given to the batch evaluator too.
         let xs = Interval::with_f32_ends(grid.x(at[0]), grid.x(at[0] + size[0] - 1));
         let ys = Interval::with_f32_ends(grid.y(at[1]), grid.y(at[1] + size[1] - 1));
+        let ev = &mut w.evals[e];
         let b = ev
             .interval
             .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
         if let Some(g) = uniform_grey(b) {
             if g != 0 {
                 for j in at[1]..at[1] + size[1] {
-                    for i in cols.clone() {
-                        if layer.inside(i, j) {
-                            rows[self.at(i, j)] = g;
+                    let r = self.row(j);
+                    let dst = &mut rows[r + cols.start..r + cols.end];
+                    for (d, &v) in dst.iter_mut().zip(self.values(j, cols.clone())) {
+                        if v >= 0.0 {
+                            *d = g;
                         }
                     }
                 }
             }
             return;
         }
+        let near = !b.may_be_nan()
+            && b.lo <= b.hi
+            && grey(b.hi as f32).saturating_sub(grey(b.lo as f32)) <= CLOSE_LEVELS;
+        let mut e = e;
         if big {
             let short = ev
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
                 .filter(|t| 10 * t.len() < 8 * ev.tape.len());
             if let Some(t) = short {
-                let mut local = Evals::new(&t);
-                return self.tile(&mut local, rows, at, size, close);
+                // The same bounds with the shorter tape: go on splitting.
+                e = w.find_or_add(t);
             }
         }
-        let near = !b.may_be_nan()
-            && b.lo <= b.hi
-            && grey(b.hi as f32).saturating_sub(grey(b.lo as f32)) <= CLOSE_LEVELS;
-        self.split_or_sample(ev, rows, at, size, near)
+        self.split_or_sample(w, e, rows, at, size, near)
     }
 
-    /// Quarters a tile, or samples a leaf at its inside pixels.
+    /// Quarters a tile, or loads a leaf's inside pixels into evaluator `e`
+    /// (evaluating its block whenever it fills).
+    #[allow(clippy::too_many_arguments)]
     fn split_or_sample(
         &self,
-        ev: &mut Evals,
+        w: &mut Worker,
+        e: usize,
         rows: &mut [u8],
         at: [usize; 2],
         size: [usize; 2],
         close: bool,
     ) {
-        let (grid, layer) = (self.grid, self.layer);
-        let cols = at[0]..at[0] + size[0];
         if size[0] > LEAF || size[1] > LEAF {
             let hw = size[0].div_ceil(2);
             let hh = size[1].div_ceil(2);
-            for (dx, w) in [(0, hw), (hw, size[0] - hw)] {
-                for (dy, h) in [(0, hh), (hh, size[1] - hh)] {
-                    if w > 0 && h > 0 {
-                        self.tile(ev, rows, [at[0] + dx, at[1] + dy], [w, h], close);
+            for (dx, tw) in [(0, hw), (hw, size[0] - hw)] {
+                for (dy, th) in [(0, hh), (hh, size[1] - hh)] {
+                    if tw > 0 && th > 0 {
+                        self.tile(w, e, rows, [at[0] + dx, at[1] + dy], [tw, th], close);
                     }
                 }
             }
             return;
         }
-        // A leaf: its inside pixels in one batch.
-        let mut idx = [0usize; LEAF * LEAF];
-        let mut n = 0;
-        {
-            let zf = self.z as f32;
+        let ev = &mut w.evals[e];
+        let zf = self.z as f32;
+        let cols = at[0]..at[0] + size[0];
+        for j in at[1]..at[1] + size[1] {
+            if ev.n + size[0] > BLOCK {
+                ev.flush(rows);
+            }
+            let yf = self.grid.y(j) as f32;
+            let r = self.row(j);
+            let mut n = ev.n;
             let (x, y, zz) = ev.batch.coords_mut();
-            for j in at[1]..at[1] + size[1] {
-                let yf = grid.y(j) as f32;
-                for i in cols.clone() {
-                    if layer.inside(i, j) {
-                        x[n] = grid.x(i) as f32;
-                        y[n] = yf;
-                        zz[n] = zf;
-                        idx[n] = self.at(i, j);
-                        n += 1;
-                    }
+            for (i, &v) in cols.clone().zip(self.values(j, cols.clone())) {
+                if v >= 0.0 {
+                    x[n] = self.xs[i];
+                    y[n] = yf;
+                    zz[n] = zf;
+                    ev.idx[n] = r + i;
+                    n += 1;
                 }
             }
-        }
-        let s = ev.batch.eval_loaded(n);
-        for (&q, &v) in idx[..n].iter().zip(s) {
-            if !v.is_nan() {
-                rows[q] = grey(v);
-            }
+            ev.n = n;
         }
     }
 }
