@@ -113,8 +113,10 @@ impl Worker {
     }
 }
 
-/// Side of the tiles that bands of rows are cut into.
+/// Side of the tiles that bands of rows are cut into (one bit of a `u64`
+/// per column of a tile in the inside masks).
 const TILE: usize = 64;
+const _: () = assert!(TILE == u64::BITS as usize);
 /// Side of the leaves sampled together (their inside pixels join the
 /// evaluator's block).
 const LEAF: usize = 16;
@@ -193,19 +195,34 @@ impl AttributeStack {
         // The pixel centres as the reference gives them to the evaluator.
         let xs: Vec<f32> = (0..nx).map(|i| grid.x(i) as f32).collect();
         let z = layer.z;
+        // The channel's tape with the branches the whole layer decides cut
+        // (a slice's fixed z often decides some).
+        let tape = {
+            let mut iv = IntervalEval::new(&self.tape);
+            iv.eval(
+                Interval::with_f32_ends(grid.x(0), grid.x(nx - 1)),
+                Interval::with_f32_ends(grid.y(0), grid.y(ny - 1)),
+                Interval::with_f32_ends(z, z),
+            );
+            self.tape
+                .simplify(iv.values(), Simplify::Exact)
+                .unwrap_or_else(|| self.tape.clone())
+        };
         bands.into_par_iter().for_each_init(
             || Worker {
-                evals: vec![Evals::new(&self.tape)],
+                evals: vec![Evals::new(&tape)],
             },
             |w, (j0, rows)| {
                 let h = rows.len() / nx;
+                let tiles = nx.div_ceil(TILE);
                 let band = Band {
                     grid,
-                    layer,
                     z,
                     xs: &xs,
                     j0,
                     h,
+                    masks: inside_masks(layer, j0, h, tiles),
+                    tiles,
                 };
                 for i0 in (0..nx).step_by(TILE) {
                     let tw = TILE.min(nx - i0);
@@ -221,13 +238,15 @@ impl AttributeStack {
 /// One band of rows being filled.
 struct Band<'a> {
     grid: &'a SliceGrid,
-    layer: &'a LayerValues,
     z: f64,
     /// x of each pixel column's centre, in f32.
     xs: &'a [f32],
     /// First image row (from the bottom) and row count of the band.
     j0: usize,
     h: usize,
+    /// The band's inside pixels ([`inside_masks`]), `tiles` words a row.
+    masks: Vec<u64>,
+    tiles: usize,
 }
 
 impl Band<'_> {
@@ -236,10 +255,13 @@ impl Band<'_> {
         (self.j0 + self.h - 1 - j) * self.grid.nx
     }
 
-    /// The layer's values of row `j` over columns `cols`.
-    fn values(&self, j: usize, cols: std::ops::Range<usize>) -> &[f32] {
-        let r = j * self.grid.nx;
-        &self.layer.values[r + cols.start..r + cols.end]
+    /// The inside pixels of row `j` over columns `cols` (within one
+    /// [`TILE`] of columns): bit `i - cols.start` for column `i`.
+    fn inside(&self, j: usize, cols: &std::ops::Range<usize>) -> u64 {
+        let m = self.masks[(j - self.j0) * self.tiles + cols.start / TILE];
+        let w = cols.end - cols.start;
+        let keep = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
+        (m >> (cols.start % TILE)) & keep
     }
 
     /// Fills the tile at pixel `at` of size `size` with evaluator `e` of
@@ -256,10 +278,7 @@ impl Band<'_> {
         close: bool,
     ) {
         let cols = at[0]..at[0] + size[0];
-        // Stops at the first inside pixel (most tiles of a solid's interior
-        // have one at their corner), so tiles are not counted at every level.
-        let any_inside = (at[1]..at[1] + size[1])
-            .any(|j| self.values(j, cols.clone()).iter().any(|&v| v >= 0.0));
+        let any_inside = (at[1]..at[1] + size[1]).any(|j| self.inside(j, &cols) != 0);
         if !any_inside {
             return;
         }
@@ -277,13 +296,18 @@ impl Band<'_> {
             .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
         if let Some(g) = uniform_grey(b) {
             if g != 0 {
+                let all = if size[0] == 64 { u64::MAX } else { (1u64 << size[0]) - 1 };
                 for j in at[1]..at[1] + size[1] {
-                    let r = self.row(j);
-                    let dst = &mut rows[r + cols.start..r + cols.end];
-                    for (d, &v) in dst.iter_mut().zip(self.values(j, cols.clone())) {
-                        if v >= 0.0 {
-                            *d = g;
-                        }
+                    let r = self.row(j) + cols.start;
+                    let dst = &mut rows[r..r + size[0]];
+                    let mut m = self.inside(j, &cols);
+                    if m == all {
+                        dst.fill(g);
+                        continue;
+                    }
+                    while m != 0 {
+                        dst[m.trailing_zeros() as usize] = g;
+                        m &= m - 1;
                     }
                 }
             }
@@ -334,25 +358,50 @@ impl Band<'_> {
         let zf = self.z as f32;
         let cols = at[0]..at[0] + size[0];
         for j in at[1]..at[1] + size[1] {
-            if ev.n + size[0] > BLOCK {
+            let mut m = self.inside(j, &cols);
+            if m == 0 {
+                continue;
+            }
+            let count = m.count_ones() as usize;
+            if ev.n + count > BLOCK {
                 ev.flush(rows);
             }
             let yf = self.grid.y(j) as f32;
-            let r = self.row(j);
-            let mut n = ev.n;
+            let r = self.row(j) + cols.start;
+            let xs = &self.xs[cols.clone()];
+            let n = ev.n;
             let (x, y, zz) = ev.batch.coords_mut();
-            for (i, &v) in cols.clone().zip(self.values(j, cols.clone())) {
-                if v >= 0.0 {
-                    x[n] = self.xs[i];
-                    y[n] = yf;
-                    zz[n] = zf;
-                    ev.idx[n] = r + i;
-                    n += 1;
-                }
+            y[n..n + count].fill(yf);
+            zz[n..n + count].fill(zf);
+            let (x, idx) = (&mut x[n..n + count], &mut ev.idx[n..n + count]);
+            for (xq, iq) in x.iter_mut().zip(idx) {
+                let k = m.trailing_zeros() as usize;
+                *xq = xs[k];
+                *iq = r + k;
+                m &= m - 1;
             }
-            ev.n = n;
+            ev.n = n + count;
         }
     }
+}
+
+/// Bit masks of the inside pixels of rows `j0..j0 + h` of `layer`: for
+/// row `j` and tile column `t` (columns `64 t ..`), word
+/// `(j - j0) * tiles + t` with bit `i - 64 t` for column `i`.
+fn inside_masks(layer: &LayerValues, j0: usize, h: usize, tiles: usize) -> Vec<u64> {
+    let nx = layer.nx;
+    let mut masks = vec![0u64; h * tiles];
+    for (dj, words) in masks.chunks_mut(tiles).enumerate() {
+        let row = &layer.values[(j0 + dj) * nx..(j0 + dj + 1) * nx];
+        for (word, vals) in words.iter_mut().zip(row.chunks(TILE)) {
+            let mut m = 0u64;
+            for (k, &v) in vals.iter().enumerate() {
+                m |= u64::from(v >= 0.0) << k;
+            }
+            *word = m;
+        }
+    }
+    masks
 }
 
 /// The grey levels of layer `k` the straightforward way, for tests: the

@@ -818,6 +818,24 @@ const LANES: usize = 8;
 /// [`bernstein`] (without derivatives) for `LANES` parameters at once, the
 /// same operations per lane: `out[i][e]` is `B_i^n(t[e])`.
 fn bernstein_lanes(n: usize, t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
+    // Low degrees with their loops unrolled (the same operations).
+    match n {
+        1 => bernstein_lanes_of::<1>(t, out),
+        2 => bernstein_lanes_of::<2>(t, out),
+        3 => bernstein_lanes_of::<3>(t, out),
+        4 => bernstein_lanes_of::<4>(t, out),
+        5 => bernstein_lanes_of::<5>(t, out),
+        _ => bernstein_lanes_of_any(n, t, out),
+    }
+}
+
+#[inline(always)]
+fn bernstein_lanes_of<const N: usize>(t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
+    bernstein_lanes_of_any(N, t, out)
+}
+
+#[inline(always)]
+fn bernstein_lanes_of_any(n: usize, t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
     let mut s = [0.0f64; LANES];
     for e in 0..LANES {
         s[e] = 1.0 - t[e];
