@@ -6,7 +6,7 @@
 use crate::error::{FabError, Result};
 use crate::grid::SliceGrid;
 use crate::image::GreyImage;
-use crate::raster::{rasterize, LayerValues};
+use crate::raster::{rasterize, BandRaster, BAND};
 use crate::stack::StackFormat;
 use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape, BLOCK};
 use rayon::prelude::*;
@@ -165,18 +165,12 @@ impl AttributeStack {
 
     /// Grey levels of layer `k`, rows top (largest y) first.
     pub fn layer_pixels(&self, shape: &Shape, grid: &SliceGrid, k: usize) -> Vec<u8> {
-        let layer = rasterize(shape, grid, k);
-        self.grey_layer(grid, &layer)
-    }
-
-    /// Grey levels over the inside pixels of `layer` (sampled on `grid`).
-    fn grey_layer(&self, grid: &SliceGrid, layer: &LayerValues) -> Vec<u8> {
         let (nx, ny) = (grid.nx, grid.ny);
         let mut pixels = vec![0u8; nx * ny];
         if nx == 0 || ny == 0 {
             return pixels;
         }
-        // Bands of TILE image rows counted from the bottom (j), stored top
+        // Bands of BAND image rows counted from the bottom (j), stored top
         // row first: band b holds rows j0..j0 + h at pixel rows
         // ny - j0 - h .. ny - j0. Cut the buffer from its end.
         let bands: Vec<(usize, &mut [u8])> = {
@@ -184,7 +178,7 @@ impl AttributeStack {
             let mut rest = &mut pixels[..];
             let mut j0 = 0;
             while j0 < ny {
-                let h = TILE.min(ny - j0);
+                let h = BAND.min(ny - j0);
                 let (head, tail) = rest.split_at_mut((ny - j0 - h) * nx);
                 out.push((j0, tail));
                 rest = head;
@@ -194,7 +188,7 @@ impl AttributeStack {
         };
         // The pixel centres as the reference gives them to the evaluator.
         let xs: Vec<f32> = (0..nx).map(|i| grid.x(i) as f32).collect();
-        let z = layer.z;
+        let z = grid.z(k);
         // The channel's tape with the branches the whole layer decides cut
         // (a slice's fixed z often decides some).
         let tape = {
@@ -208,20 +202,27 @@ impl AttributeStack {
                 .simplify(iv.values(), Simplify::Exact)
                 .unwrap_or_else(|| self.tape.clone())
         };
+        let tiles = nx.div_ceil(TILE);
+        // Each band is sampled (the shape's value, as `rasterize` samples
+        // it) and then graded while its values are in cache.
         bands.into_par_iter().for_each_init(
-            || Worker {
-                evals: vec![Evals::new(&tape)],
+            || {
+                let w = Worker {
+                    evals: vec![Evals::new(&tape)],
+                };
+                (BandRaster::new(shape), w, Vec::new())
             },
-            |w, (j0, rows)| {
+            |(raster, w, values), (j0, rows)| {
                 let h = rows.len() / nx;
-                let tiles = nx.div_ceil(TILE);
+                values.resize(h * nx, 0.0);
+                raster.band(grid, z, j0, values);
                 let band = Band {
                     grid,
                     z,
                     xs: &xs,
                     j0,
                     h,
-                    masks: inside_masks(layer, j0, h, tiles),
+                    masks: inside_masks(values, nx, tiles),
                     tiles,
                 };
                 for i0 in (0..nx).step_by(TILE) {
@@ -296,7 +297,11 @@ impl Band<'_> {
             .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
         if let Some(g) = uniform_grey(b) {
             if g != 0 {
-                let all = if size[0] == 64 { u64::MAX } else { (1u64 << size[0]) - 1 };
+                let all = if size[0] == 64 {
+                    u64::MAX
+                } else {
+                    (1u64 << size[0]) - 1
+                };
                 for j in at[1]..at[1] + size[1] {
                     let r = self.row(j) + cols.start;
                     let dst = &mut rows[r..r + size[0]];
@@ -385,18 +390,28 @@ impl Band<'_> {
     }
 }
 
-/// Bit masks of the inside pixels of rows `j0..j0 + h` of `layer`: for
-/// row `j` and tile column `t` (columns `64 t ..`), word
-/// `(j - j0) * tiles + t` with bit `i - 64 t` for column `i`.
-fn inside_masks(layer: &LayerValues, j0: usize, h: usize, tiles: usize) -> Vec<u64> {
-    let nx = layer.nx;
+/// Bit masks of the inside pixels (value `>= 0`) of the rows of `values`
+/// (`nx` a row): for row `r` and tile column `t` (columns `64 t ..`), word
+/// `r * tiles + t` with bit `i - 64 t` for column `i`.
+fn inside_masks(values: &[f32], nx: usize, tiles: usize) -> Vec<u64> {
+    let h = values.len() / nx;
     let mut masks = vec![0u64; h * tiles];
-    for (dj, words) in masks.chunks_mut(tiles).enumerate() {
-        let row = &layer.values[(j0 + dj) * nx..(j0 + dj + 1) * nx];
+    for (words, row) in masks.chunks_mut(tiles).zip(values.chunks(nx)) {
         for (word, vals) in words.iter_mut().zip(row.chunks(TILE)) {
+            // Eight pixels at a time: one byte 0 or 1 each, gathered into
+            // the top byte by one multiplication (byte k lands on bit
+            // 56 + k; the other partial products fall below bit 56 or
+            // beyond bit 63 without carries, as the bytes are 0 or 1).
             let mut m = 0u64;
-            for (k, &v) in vals.iter().enumerate() {
-                m |= u64::from(v >= 0.0) << k;
+            let mut eights = vals.chunks_exact(8);
+            for (c, e) in eights.by_ref().enumerate() {
+                let bytes: [u8; 8] = std::array::from_fn(|k| u8::from(e[k] >= 0.0));
+                let b = u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56;
+                m |= b << (8 * c);
+            }
+            let done = vals.len() - eights.remainder().len();
+            for (k, &v) in eights.remainder().iter().enumerate() {
+                m |= u64::from(v >= 0.0) << (done + k);
             }
             *word = m;
         }
