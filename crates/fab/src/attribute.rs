@@ -62,9 +62,14 @@ impl Evals {
             return;
         }
         let s = self.batch.eval_loaded(n);
-        for (&q, &v) in self.idx[..n].iter().zip(s) {
-            // NaN (undefined) stays 0 like outside: `grey` maps it there.
-            rows[q] = grey(v);
+        // The levels in one vector loop, then stored to their pixels. NaN
+        // (undefined) gives 0 like outside.
+        let mut g = [0u8; BLOCK];
+        for (g, &v) in g.iter_mut().zip(s) {
+            *g = grey(v);
+        }
+        for (&q, &g) in self.idx[..n].iter().zip(&g) {
+            rows[q] = g;
         }
     }
 }
@@ -133,7 +138,12 @@ const CLOSE_LEVELS: u8 = 2;
 /// Grey level of attribute value `s`: `round(255 clamp(s, 0, 1))`, 0 for
 /// NaN.
 fn grey(s: f32) -> u8 {
-    (255.0 * s.clamp(0.0, 1.0)).round() as u8
+    // `max` maps NaN to 0 (as `clamp` and the cast would), so the rounded
+    // value is a whole number v in 0..=255; v + 2^23 is exact with v in
+    // its low mantissa bits (bit operations that vectorise, unlike the
+    // saturating casts).
+    let v = (255.0 * s.max(0.0).min(1.0)).round();
+    (v + 8_388_608.0).to_bits() as u8
 }
 
 /// The grey level every value of `b` takes, with a margin wide enough
@@ -398,25 +408,30 @@ fn inside_masks(values: &[f32], nx: usize, tiles: usize) -> Vec<u64> {
     let mut masks = vec![0u64; h * tiles];
     for (words, row) in masks.chunks_mut(tiles).zip(values.chunks(nx)) {
         for (word, vals) in words.iter_mut().zip(row.chunks(TILE)) {
-            // Eight pixels at a time: one byte 0 or 1 each, gathered into
-            // the top byte by one multiplication (byte k lands on bit
-            // 56 + k; the other partial products fall below bit 56 or
-            // beyond bit 63 without carries, as the bytes are 0 or 1).
             let mut m = 0u64;
-            let mut eights = vals.chunks_exact(8);
-            for (c, e) in eights.by_ref().enumerate() {
-                let bytes: [u8; 8] = std::array::from_fn(|k| u8::from(e[k] >= 0.0));
-                let b = u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56;
-                m |= b << (8 * c);
-            }
-            let done = vals.len() - eights.remainder().len();
-            for (k, &v) in eights.remainder().iter().enumerate() {
-                m |= u64::from(v >= 0.0) << (done + k);
+            if let Ok(full) = <&[f32; TILE]>::try_from(vals) {
+                m = tile_mask(full);
+            } else {
+                for (k, &v) in vals.iter().enumerate() {
+                    m |= u64::from(v >= 0.0) << k;
+                }
             }
             *word = m;
         }
     }
     masks
+}
+
+/// The inside bits of one row of a whole tile: fixed shifts, compiled to
+/// vector compares (kept out of line so the loop around it is not
+/// vectorised instead, which was slower).
+#[inline(never)]
+fn tile_mask(vals: &[f32; TILE]) -> u64 {
+    let mut m = 0u64;
+    for (k, &v) in vals.iter().enumerate() {
+        m |= u64::from(v >= 0.0) << k;
+    }
+    m
 }
 
 /// The grey levels of layer `k` the straightforward way, for tests: the
@@ -501,5 +516,79 @@ impl StackFormat for AttributeStack {
         }
         s.push_str("  ]\n}\n");
         s.into_bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{grey, inside_masks, tile_mask, TILE};
+
+    /// The vectorisable level equals `round(255 clamp(s, 0, 1))` with a
+    /// saturating cast (NaN to 0) on every f32 in [-0.5, 1.5] near the
+    /// level boundaries and on the special values.
+    #[test]
+    fn grey_is_the_rounded_clamped_level() {
+        let want = |s: f32| (255.0 * s.clamp(0.0, 1.0)).round() as u8;
+        let mut specials = vec![
+            f32::NAN,
+            -f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            1.0,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+        ];
+        // Each half level and its neighbours a few ulps away.
+        for k in 0..=512 {
+            let b = (k as f32 - 0.5) / 510.0;
+            let mut v = b;
+            for _ in 0..4 {
+                v = f32::from_bits(v.to_bits().wrapping_sub(1));
+            }
+            for _ in 0..9 {
+                specials.push(v);
+                v = f32::from_bits(v.to_bits() + 1);
+            }
+        }
+        for &s in &specials {
+            assert_eq!(grey(s), want(s), "{s:e} ({:08x})", s.to_bits());
+        }
+        // And a dense sweep of [-0.5, 1.5].
+        for k in 0..1_000_000 {
+            let s = -0.5 + k as f32 * 2e-6;
+            assert_eq!(grey(s), want(s), "{s:e}");
+        }
+    }
+
+    /// The bit masks mark exactly the pixels with `v >= 0` (NaN outside,
+    /// -0 inside), for rows of whole and partial tiles.
+    #[test]
+    fn masks_mark_inside_pixels() {
+        let nx = 2 * TILE + 7;
+        let rows = 5;
+        let values: Vec<f32> = (0..nx * rows)
+            .map(|i| match (i * 7919) % 11 {
+                0 => f32::NAN,
+                1 => -0.0,
+                2 => f32::INFINITY,
+                3 => f32::NEG_INFINITY,
+                k if k % 2 == 0 => -(k as f32),
+                k => k as f32 * 0.5,
+            })
+            .collect();
+        let tiles = nx.div_ceil(TILE);
+        let masks = inside_masks(&values, nx, tiles);
+        for r in 0..rows {
+            for i in 0..nx {
+                let bit = masks[r * tiles + i / TILE] >> (i % TILE) & 1 == 1;
+                assert_eq!(bit, values[r * nx + i] >= 0.0, "row {r}, column {i}");
+            }
+        }
+        let all = [1.0f32; TILE];
+        assert_eq!(tile_mask(&all), u64::MAX);
     }
 }
