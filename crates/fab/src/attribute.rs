@@ -5,7 +5,6 @@
 
 use crate::error::{FabError, Result};
 use crate::grid::SliceGrid;
-use crate::image::GreyImage;
 use crate::raster::{rasterize, BandRaster, BAND};
 use crate::stack::StackFormat;
 use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape, BLOCK};
@@ -37,6 +36,8 @@ pub struct AttributeStack {
 /// inside pixels loaded into its batch and waiting for a full block.
 struct Evals {
     tape: Tape,
+    /// [`tape_cost`] of the tape.
+    cost: u32,
     batch: BatchEval,
     interval: IntervalEval,
     /// Indices into the band's buffer of the `n` pixels loaded so far.
@@ -48,6 +49,7 @@ impl Evals {
     fn new(tape: &Tape) -> Evals {
         Evals {
             tape: tape.clone(),
+            cost: tape_cost(tape),
             batch: BatchEval::new(tape),
             interval: IntervalEval::new(tape),
             idx: Box::new([0; BLOCK]),
@@ -84,6 +86,28 @@ fn same_tape(a: &Tape, b: &Tape) -> bool {
             (Op::Const(c), Op::Const(d)) => c.to_bits() == d.to_bits(),
             _ => x == y,
         })
+}
+
+/// Rough cost per point of evaluating `t` in batches, in units of one
+/// vectorised add: the transcendental kernels (f64 polynomials, and the
+/// scalar library calls for the rarer ones) weigh tens of simple steps, so
+/// a tile that decides which side of a `pow` it needs gains more than its
+/// share of steps says.
+fn tape_cost(t: &Tape) -> u32 {
+    use microfrep_core::{BinaryOp as B, Op, UnaryOp as U};
+    t.ops()
+        .iter()
+        .map(|op| match op {
+            Op::Var(_) | Op::Const(_) | Op::Param(_) => 0,
+            Op::Unary(U::Exp | U::Ln | U::Sin | U::Cos, _) => 12,
+            Op::Unary(U::Tan | U::Asin | U::Acos | U::Atan | U::Sinh | U::Cosh | U::Tanh, _) => 40,
+            Op::Unary(U::Sqrt, _) | Op::Binary(B::Div, ..) => 2,
+            Op::Binary(B::Pow, ..) => 24,
+            Op::Binary(B::Atan2 | B::Rem, ..) => 40,
+            Op::Field { .. } => 40,
+            _ => 1,
+        })
+        .sum()
 }
 
 /// Simplified tapes kept per thread (with their evaluators, which are
@@ -336,7 +360,7 @@ impl Band<'_> {
             let short = ev
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
-                .filter(|t| 10 * t.len() < 8 * ev.tape.len());
+                .filter(|t| 10 * tape_cost(t) < 8 * ev.cost);
             if let Some(t) = short {
                 // The same bounds with the shorter tape: go on splitting.
                 e = w.find_or_add(t);
@@ -481,13 +505,14 @@ impl StackFormat for AttributeStack {
     ) -> Result<(Vec<u8>, u64)> {
         let pixels = self.layer_pixels(shape, grid, k);
         let solid = pixels.iter().filter(|&&v| v > 0).count() as u64;
-        let img = GreyImage {
+        // The levels go to the encoder as they are (no copy).
+        let img = microfrep_io::png::Image {
             width: grid.nx,
             height: grid.ny,
-            binary: false,
-            pixels,
+            pixels: microfrep_io::png::Pixels::Grey,
+            data: pixels,
         };
-        Ok((img.encode(path)?, solid))
+        Ok((microfrep_io::png::encode(&img, path)?, solid))
     }
     fn footer(&self, grid: &SliceGrid) -> Vec<u8> {
         let mut s = String::from("{\n  \"format\": \"png-8bit-attribute\",\n");
