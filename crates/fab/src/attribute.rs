@@ -11,6 +11,8 @@ use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape, B
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::Arc;
 
 /// 8-bit grey layers of attribute channel `channel` (0-based index into
 /// [`Shape::attributes`]).
@@ -30,6 +32,49 @@ pub struct AttributeStack {
     pub channel: usize,
     /// The channel's expression alone.
     tape: Tape,
+    /// How bounding paid off so far, per tile size ([`Payoff::level`]).
+    payoff: Arc<[Payoff; 3]>,
+}
+
+/// How often bounding tiles of one size paid (filled the tile or gave it a
+/// shorter tape), over a whole stack: models whose bounds are too wide to
+/// decide anything (long channels, where bounding a tile costs as much as
+/// sampling many pixels) stop paying for them. Which tiles are bounded
+/// changes only the time, never a level.
+#[derive(Debug, Default)]
+struct Payoff {
+    tries: AtomicU64,
+    useful: AtomicU64,
+    skipped: AtomicU64,
+}
+
+impl Payoff {
+    /// The entry for tiles of `size`: over 32 pixels, over 16, the rest.
+    fn level(size: [usize; 2]) -> usize {
+        match size[0].max(size[1]) {
+            33.. => 0,
+            17..=32 => 1,
+            _ => 2,
+        }
+    }
+
+    /// Whether to bound the next tile: while fewer than 64 were, while at
+    /// least 1 in 16 paid, and then every 16th tile still (so a change
+    /// along the stack is seen).
+    fn worth(&self) -> bool {
+        let tries = self.tries.load(Relaxed);
+        if tries < 64 || 16 * self.useful.load(Relaxed) >= tries {
+            return true;
+        }
+        self.skipped.fetch_add(1, Relaxed) % 16 == 15
+    }
+
+    fn record(&self, useful: bool) {
+        self.tries.fetch_add(1, Relaxed);
+        if useful {
+            self.useful.fetch_add(1, Relaxed);
+        }
+    }
 }
 
 /// An evaluator of the channel (or of a tile's shorter tape) with the
@@ -194,6 +239,7 @@ impl AttributeStack {
         Ok(AttributeStack {
             channel,
             tape: Tape::new(&shape.attributes()[channel].expr),
+            payoff: Arc::default(),
         })
     }
 
@@ -252,6 +298,7 @@ impl AttributeStack {
                 raster.band(grid, z, j0, values);
                 let band = Band {
                     grid,
+                    payoff: &self.payoff,
                     z,
                     xs: &xs,
                     j0,
@@ -273,6 +320,7 @@ impl AttributeStack {
 /// One band of rows being filled.
 struct Band<'a> {
     grid: &'a SliceGrid,
+    payoff: &'a [Payoff; 3],
     z: f64,
     /// x of each pixel column's centre, in f32.
     xs: &'a [f32],
@@ -318,7 +366,8 @@ impl Band<'_> {
             return;
         }
         let big = size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE;
-        if !(big || close) {
+        let payoff = &self.payoff[Payoff::level(size)];
+        if !(big || close) || !payoff.worth() {
             return self.split_or_sample(w, e, rows, at, size, false);
         }
         let grid = self.grid;
@@ -330,6 +379,7 @@ impl Band<'_> {
             .interval
             .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
         if let Some(g) = uniform_grey(b) {
+            payoff.record(true);
             if g != 0 {
                 let all = if size[0] == 64 {
                     u64::MAX
@@ -361,10 +411,13 @@ impl Band<'_> {
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
                 .filter(|t| 10 * tape_cost(t) < 8 * ev.cost);
+            payoff.record(short.is_some());
             if let Some(t) = short {
                 // The same bounds with the shorter tape: go on splitting.
                 e = w.find_or_add(t);
             }
+        } else {
+            payoff.record(false);
         }
         self.split_or_sample(w, e, rows, at, size, near)
     }
