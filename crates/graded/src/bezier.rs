@@ -1215,3 +1215,79 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod cache_tests {
+    use super::{net_range, BezierBox, CACHED_ROWS};
+    use microfrep_core::{Field, Interval};
+
+    /// Two fields of the same degrees and box but different weights.
+    fn pair() -> (BezierBox, BezierBox) {
+        let deg = [3, 3, 2];
+        let n = 4 * 4 * 3;
+        let w1: Vec<f64> = (0..n).map(|i| ((i * 7 % 11) as f64) / 10.0).collect();
+        let w2: Vec<f64> = (0..n).map(|i| 1.0 - ((i * 5 % 13) as f64) / 12.0).collect();
+        let lo = [-1.0, -1.0, 0.0];
+        let hi = [1.0, 1.0, 1.0];
+        (
+            BezierBox::new("a", lo, hi, deg, w1).unwrap(),
+            BezierBox::new("b", lo, hi, deg, w2).unwrap(),
+        )
+    }
+
+    /// Rows evaluated by two fields in turn, and more rows than the
+    /// per-thread row cache holds (so slots are reused by other rows): every
+    /// batch value has the bits of the field's own point evaluation, and a
+    /// clone (which shares the cache entries) agrees with the original.
+    #[test]
+    fn cached_rows_belong_to_their_field() {
+        let (a, b) = pair();
+        let a2 = a.clone();
+        let rows = 3 * CACHED_ROWS;
+        for pass in 0..2 {
+            for r in 0..rows {
+                let y = -1.0 + 2.0 * r as f32 / rows as f32;
+                let z = 0.25 + 0.5 * (r % 3) as f32;
+                let x: Vec<f32> = (0..40).map(|i| -1.1 + 0.055 * i as f32).collect();
+                let (ys, zs) = (vec![y; x.len()], vec![z; x.len()]);
+                for f in [&a, &b, &a2] {
+                    let mut out = vec![0f32; x.len()];
+                    f.eval_batch(&x, &ys, &zs, &mut out);
+                    for (i, &o) in out.iter().enumerate() {
+                        let want = f.eval([x[i] as f64, y as f64, z as f64]) as f32;
+                        assert_eq!(o.to_bits(), want.to_bits(), "pass {pass} row {r} lane {i}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Bounds over boxes flat in z, asked of two fields in turn at more z
+    /// than the per-thread cache of collapsed nets holds: each equals the
+    /// bound computed from the field's own net without the cache.
+    #[test]
+    fn cached_flat_nets_belong_to_their_field() {
+        let (a, b) = pair();
+        for pass in 0..2 {
+            for k in 0..12 {
+                let z = 0.05 + 0.08 * k as f64;
+                let bx = [
+                    Interval::new(-0.3, 0.1),
+                    Interval::new(0.2, 0.45),
+                    Interval::point(z),
+                ];
+                // The second round finds both nets cached.
+                for f in [&a, &b, &a, &b] {
+                    let got = f.interval(bx);
+                    let (u, _) = f.unit_box(bx);
+                    let (lo, hi) = net_range(&f.w, f.deg, u);
+                    assert_eq!(
+                        (got.lo, got.hi),
+                        (lo - f.tol, hi + f.tol),
+                        "pass {pass} z {z}"
+                    );
+                }
+            }
+        }
+    }
+}
