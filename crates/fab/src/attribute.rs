@@ -160,7 +160,7 @@ fn tape_cost(t: &Tape) -> u32 {
 const CACHED_TAPES: usize = 8;
 
 /// One thread's evaluators: the channel's (index 0) and those of the
-/// shorter tapes tiles were given, most recently used last.
+/// shorter tapes tiles were given, in the order they were first needed.
 struct Worker {
     evals: Vec<Evals>,
 }
@@ -175,8 +175,8 @@ impl Worker {
         self.evals.len() - 1
     }
 
-    /// Flushes every evaluator into `rows`, then drops the oldest shorter
-    /// tapes beyond [`CACHED_TAPES`] (between tiles, so no index held by a
+    /// Flushes every evaluator into `rows`, then drops the first needed
+    /// shorter tapes beyond [`CACHED_TAPES`] (between tiles, so no index held by a
     /// tile in progress moves).
     fn finish(&mut self, rows: &mut [u8]) {
         for e in &mut self.evals {
@@ -599,7 +599,80 @@ impl StackFormat for AttributeStack {
 
 #[cfg(test)]
 mod tests {
-    use super::{grey, inside_masks, tile_mask, TILE};
+    use super::{grey, inside_masks, tile_mask, Evals, Worker, CACHED_TAPES, TILE};
+    use microfrep_core::{BatchEval, Expr, Tape, BLOCK};
+
+    /// More shorter tapes than a worker keeps, each with pixels waiting:
+    /// finishing stores every pixel's level from its own tape, keeps the
+    /// channel's evaluator and the last needed tapes, and a dropped tape is
+    /// made anew when needed again (a kept one is found).
+    #[test]
+    fn workers_flush_every_tape_and_keep_the_last() {
+        let x = Expr::x();
+        let tapes: Vec<Tape> = (0..CACHED_TAPES + 4)
+            .map(|k| Tape::new(&(0.02 * k as f64 + 0.5 * (&x * (1.0 + k as f64)).sin().abs())))
+            .collect();
+        let root = Tape::new(&(&x * 0.0 + 0.25));
+        let mut w = Worker {
+            evals: vec![Evals::new(&root)],
+        };
+        let mut rows = vec![0u8; (tapes.len() + 1) * BLOCK];
+        let mut want = vec![0u8; rows.len()];
+        for (k, t) in std::iter::once(&root).chain(&tapes).enumerate() {
+            let e = if k == 0 { 0 } else { w.find_or_add(t.clone()) };
+            assert_eq!(e, k);
+            let ev = &mut w.evals[e];
+            let n = 100 + k;
+            let xs: Vec<f32> = (0..n).map(|i| -2.0 + 0.037 * i as f32).collect();
+            let mut out = vec![0f32; n];
+            BatchEval::new(t).eval(&xs, &vec![0.0; n], &vec![0.0; n], &mut out);
+            let (cx, _, _) = ev.batch.coords_mut();
+            cx[..n].copy_from_slice(&xs);
+            for i in 0..n {
+                ev.idx[i] = k * BLOCK + i;
+                want[k * BLOCK + i] = grey(out[i]);
+            }
+            ev.n = n;
+        }
+        w.finish(&mut rows);
+        assert_eq!(rows, want);
+        assert_eq!(w.evals.len(), 1 + CACHED_TAPES);
+        assert!(w.evals.iter().all(|e| e.n == 0));
+        let last = tapes.len() - 1;
+        assert_eq!(w.find_or_add(tapes[last].clone()), CACHED_TAPES);
+        assert_eq!(w.find_or_add(tapes[0].clone()), 1 + CACHED_TAPES);
+    }
+
+    /// A channel that varies too fast for any tile bound to fill a tile,
+    /// without branches to cut: after the first tries, tiles are bounded
+    /// only now and then, and the levels stay those of full evaluation.
+    #[test]
+    fn bounds_that_never_pay_are_skipped_with_the_same_levels() {
+        use super::{reference_layer_pixels, AttributeStack, Relaxed};
+        use crate::SliceGrid;
+        use microfrep_core::Shape;
+        let [x, y, z] = Expr::xyz();
+        let ball = 1.0 - (x.square() + y.square() + z.square());
+        let wavy = 0.5 + 0.45 * (40.0 * &x).sin() * (40.0 * &y + &z).cos();
+        let shape = Shape::new(ball).with_attribute("wavy", wavy);
+        let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.1, 0.008).unwrap();
+        let stack = AttributeStack::new(&shape, 0).unwrap();
+        for k in 0..grid.layers {
+            let fast = stack.layer_pixels(&shape, &grid, k);
+            assert_eq!(
+                fast,
+                reference_layer_pixels(&shape, &grid, k, 0),
+                "layer {k}"
+            );
+        }
+        let big = &stack.payoff[0];
+        let (tries, useful) = (big.tries.load(Relaxed), big.useful.load(Relaxed));
+        assert!(
+            tries >= 64 && useful == 0 && big.skipped.load(Relaxed) > tries,
+            "{tries} {useful} {:?}",
+            big.skipped
+        );
+    }
 
     /// The vectorisable level equals `round(255 clamp(s, 0, 1))` with a
     /// saturating cast (NaN to 0) on every f32 in [-0.5, 1.5] near the
