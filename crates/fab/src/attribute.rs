@@ -9,10 +9,9 @@ use crate::raster::{rasterize, BandRaster, BAND};
 use crate::stack::StackFormat;
 use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape, BLOCK};
 use rayon::prelude::*;
+use std::cell::Cell;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-use std::sync::Arc;
 
 /// 8-bit grey layers of attribute channel `channel` (0-based index into
 /// [`Shape::attributes`]).
@@ -32,20 +31,19 @@ pub struct AttributeStack {
     pub channel: usize,
     /// The channel's expression alone.
     tape: Tape,
-    /// How bounding paid off so far, per tile size ([`Payoff::level`]).
-    payoff: Arc<[Payoff; 3]>,
 }
 
-/// How often bounding tiles of one size paid (filled the tile or gave it a
-/// shorter tape), over a whole stack: models whose bounds are too wide to
-/// decide anything (long channels, where bounding a tile costs as much as
-/// sampling many pixels) stop paying for them. Which tiles are bounded
-/// changes only the time, never a level.
-#[derive(Debug, Default)]
+/// Whether bounding tiles of one size paid (filled the tile or gave it a
+/// shorter tape) on a layer's probe band: on models whose bounds are too
+/// wide to decide anything (long channels, where bounding a tile costs as
+/// much as sampling many pixels) the other bands bound tiles of that size
+/// only now and then. The probe is one fixed band, so which tiles are
+/// bounded is the same on every run (and bounding changes only the time,
+/// not a level, anyway).
+#[derive(Clone, Copy, Debug, Default)]
 struct Payoff {
-    tries: AtomicU64,
-    useful: AtomicU64,
-    skipped: AtomicU64,
+    tries: u32,
+    useful: u32,
 }
 
 impl Payoff {
@@ -58,22 +56,46 @@ impl Payoff {
         }
     }
 
-    /// Whether to bound the next tile: while fewer than 64 were, while at
-    /// least 1 in 16 paid, and then every 16th tile still (so a change
-    /// along the stack is seen).
-    fn worth(&self) -> bool {
-        let tries = self.tries.load(Relaxed);
-        if tries < 64 || 16 * self.useful.load(Relaxed) >= tries {
-            return true;
+    /// Whether bounding these tiles paid: fewer than 2 tries tell nothing,
+    /// else at least 1 in 16 paid.
+    fn paid(self) -> bool {
+        self.tries < 2 || 16 * self.useful >= self.tries
+    }
+}
+
+/// Which tile sizes a band bounds, and what bounding them gave.
+struct Policy {
+    /// Per [`Payoff::level`]: bound every tile (else every 16th).
+    bound: [bool; 3],
+    skipped: Cell<[u32; 3]>,
+    seen: Cell<[Payoff; 3]>,
+}
+
+impl Policy {
+    fn new(bound: [bool; 3]) -> Policy {
+        Policy {
+            bound,
+            skipped: Cell::new([0; 3]),
+            seen: Cell::new([Payoff::default(); 3]),
         }
-        self.skipped.fetch_add(1, Relaxed) % 16 == 15
     }
 
-    fn record(&self, useful: bool) {
-        self.tries.fetch_add(1, Relaxed);
-        if useful {
-            self.useful.fetch_add(1, Relaxed);
+    /// Whether to bound the next tile of `level`.
+    fn worth(&self, level: usize) -> bool {
+        if self.bound[level] {
+            return true;
         }
+        let mut s = self.skipped.get();
+        s[level] += 1;
+        self.skipped.set(s);
+        s[level] % 16 == 0
+    }
+
+    fn record(&self, level: usize, useful: bool) {
+        let mut s = self.seen.get();
+        s[level].tries += 1;
+        s[level].useful += u32::from(useful);
+        self.seen.set(s);
     }
 }
 
@@ -239,21 +261,26 @@ impl AttributeStack {
         Ok(AttributeStack {
             channel,
             tape: Tape::new(&shape.attributes()[channel].expr),
-            payoff: Arc::default(),
         })
     }
 
     /// Grey levels of layer `k`, rows top (largest y) first.
     pub fn layer_pixels(&self, shape: &Shape, grid: &SliceGrid, k: usize) -> Vec<u8> {
+        self.levels(shape, grid, k).0
+    }
+
+    /// [`AttributeStack::layer_pixels`], and which tile sizes the probe
+    /// band found worth bounding.
+    fn levels(&self, shape: &Shape, grid: &SliceGrid, k: usize) -> (Vec<u8>, [bool; 3]) {
         let (nx, ny) = (grid.nx, grid.ny);
         let mut pixels = vec![0u8; nx * ny];
         if nx == 0 || ny == 0 {
-            return pixels;
+            return (pixels, [true; 3]);
         }
         // Bands of BAND image rows counted from the bottom (j), stored top
         // row first: band b holds rows j0..j0 + h at pixel rows
         // ny - j0 - h .. ny - j0. Cut the buffer from its end.
-        let bands: Vec<(usize, &mut [u8])> = {
+        let mut bands: Vec<(usize, &mut [u8])> = {
             let mut out = Vec::new();
             let mut rest = &mut pixels[..];
             let mut j0 = 0;
@@ -283,44 +310,51 @@ impl AttributeStack {
                 .unwrap_or_else(|| self.tape.clone())
         };
         let tiles = nx.div_ceil(TILE);
+        let init = || {
+            let w = Worker {
+                evals: vec![Evals::new(&tape)],
+            };
+            (BandRaster::new(shape), w, Vec::new())
+        };
         // Each band is sampled (the shape's value, as `rasterize` samples
         // it) and then graded while its values are in cache.
-        bands.into_par_iter().for_each_init(
-            || {
-                let w = Worker {
-                    evals: vec![Evals::new(&tape)],
-                };
-                (BandRaster::new(shape), w, Vec::new())
-            },
-            |(raster, w, values), (j0, rows)| {
-                let h = rows.len() / nx;
-                values.resize(h * nx, 0.0);
-                raster.band(grid, z, j0, values);
-                let band = Band {
-                    grid,
-                    payoff: &self.payoff,
-                    z,
-                    xs: &xs,
-                    j0,
-                    h,
-                    masks: inside_masks(values, nx, tiles),
-                    tiles,
-                };
-                for i0 in (0..nx).step_by(TILE) {
-                    let tw = TILE.min(nx - i0);
-                    band.tile(w, 0, rows, [i0, j0], [tw, h], true);
-                }
-                w.finish(rows);
-            },
-        );
-        pixels
+        type State = (BandRaster, Worker, Vec<f32>);
+        let band = |(raster, w, values): &mut State, (j0, rows): (usize, &mut [u8]), bound| {
+            let h = rows.len() / nx;
+            values.resize(h * nx, 0.0);
+            raster.band(grid, z, j0, values);
+            let band = Band {
+                grid,
+                policy: Policy::new(bound),
+                z,
+                xs: &xs,
+                j0,
+                h,
+                masks: inside_masks(values, nx, tiles),
+                tiles,
+            };
+            for i0 in (0..nx).step_by(TILE) {
+                let tw = TILE.min(nx - i0);
+                band.tile(w, 0, rows, [i0, j0], [tw, h], true);
+            }
+            w.finish(rows);
+            band.policy.seen.get()
+        };
+        // The middle band first, bounding every tile it may.
+        let probe = bands.remove(bands.len() / 2);
+        let seen = band(&mut init(), probe, [true; 3]);
+        let bound = seen.map(Payoff::paid);
+        bands.into_par_iter().for_each_init(init, |s, b| {
+            band(s, b, bound);
+        });
+        (pixels, bound)
     }
 }
 
 /// One band of rows being filled.
 struct Band<'a> {
     grid: &'a SliceGrid,
-    payoff: &'a [Payoff; 3],
+    policy: Policy,
     z: f64,
     /// x of each pixel column's centre, in f32.
     xs: &'a [f32],
@@ -366,8 +400,8 @@ impl Band<'_> {
             return;
         }
         let big = size[0] >= SIMPLIFY_TILE && size[1] >= SIMPLIFY_TILE;
-        let payoff = &self.payoff[Payoff::level(size)];
-        if !(big || close) || !payoff.worth() {
+        let level = Payoff::level(size);
+        if !(big || close) || !self.policy.worth(level) {
             return self.split_or_sample(w, e, rows, at, size, false);
         }
         let grid = self.grid;
@@ -379,7 +413,7 @@ impl Band<'_> {
             .interval
             .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
         if let Some(g) = uniform_grey(b) {
-            payoff.record(true);
+            self.policy.record(level, true);
             if g != 0 {
                 let all = if size[0] == 64 {
                     u64::MAX
@@ -411,13 +445,13 @@ impl Band<'_> {
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
                 .filter(|t| 10 * tape_cost(t) < 8 * ev.cost);
-            payoff.record(short.is_some());
+            self.policy.record(level, short.is_some());
             if let Some(t) = short {
                 // The same bounds with the shorter tape: go on splitting.
                 e = w.find_or_add(t);
             }
         } else {
-            payoff.record(false);
+            self.policy.record(level, false);
         }
         self.split_or_sample(w, e, rows, at, size, near)
     }
@@ -648,7 +682,7 @@ mod tests {
     /// only now and then, and the levels stay those of full evaluation.
     #[test]
     fn bounds_that_never_pay_are_skipped_with_the_same_levels() {
-        use super::{reference_layer_pixels, AttributeStack, Relaxed};
+        use super::{reference_layer_pixels, AttributeStack};
         use crate::SliceGrid;
         use microfrep_core::Shape;
         let [x, y, z] = Expr::xyz();
@@ -665,13 +699,13 @@ mod tests {
                 "layer {k}"
             );
         }
-        let big = &stack.payoff[0];
-        let (tries, useful) = (big.tries.load(Relaxed), big.useful.load(Relaxed));
-        assert!(
-            tries >= 64 && useful == 0 && big.skipped.load(Relaxed) > tries,
-            "{tries} {useful} {:?}",
-            big.skipped
-        );
+        // The layer through the middle: its probe band found neither large
+        // size worth bounding (small tiles are bounded only below parents
+        // near one level, so never here), and the levels are the same.
+        let k = grid.layers / 2;
+        let (fast, bound) = stack.levels(&shape, &grid, k);
+        assert_eq!(bound[..2], [false; 2]);
+        assert_eq!(fast, reference_layer_pixels(&shape, &grid, k, 0));
     }
 
     /// The vectorisable level equals `round(255 clamp(s, 0, 1))` with a
