@@ -16,15 +16,18 @@ use std::path::Path;
 /// 8-bit grey layers of attribute channel `channel` (0-based index into
 /// [`Shape::attributes`]).
 ///
-/// The channel is compiled alone, once per stack. Per layer, only pixels
+/// The channel is compiled alone, once per stack, and cut to the branches
+/// each layer needs. Bands of rows are sampled for the shape's value (as
+/// [`rasterize`] samples it) and graded at once, in parallel. Only pixels
 /// inside the solid are evaluated: tiles with no inside pixel are skipped,
 /// tiles whose interval bounds give one grey level (with a margin far wider
 /// than f32 rounding) are filled, tiles whose intervals decide branches
-/// are evaluated with the exactly simplified tape (the evaluators of a few
-/// such tapes kept per thread), and the inside pixels of the rest join
-/// full blocks of their tape's evaluator, rows of tiles in parallel. Every
-/// grey level is the one f32 evaluation of the whole channel at the pixel
-/// centre gives.
+/// that cost a fifth of the evaluation are evaluated with the exactly
+/// simplified tape (the evaluators of a few such tapes kept per thread),
+/// and the inside pixels of the rest join full blocks of their tape's
+/// evaluator. Tile sizes whose bounds never paid on a layer's middle band
+/// are bounded only now and then on its other bands. Every grey level is
+/// the one f32 evaluation of the whole channel at the pixel centre gives.
 #[derive(Clone, Debug)]
 pub struct AttributeStack {
     /// The channel.
