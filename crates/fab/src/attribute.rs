@@ -27,7 +27,10 @@ use std::path::Path;
 /// and the inside pixels of the rest join full blocks of their tape's
 /// evaluator. Tile sizes whose bounds never paid on a layer's middle band
 /// are bounded only now and then on its other bands. Every grey level is
-/// the one f32 evaluation of the whole channel at the pixel centre gives.
+/// the one f32 evaluation of the whole channel at the pixel centre gives
+/// (with its real powers of whole exponents evaluated as integer powers,
+/// which moves a level only where the exact value is within a few f32
+/// roundings of a half level).
 #[derive(Clone, Debug)]
 pub struct AttributeStack {
     /// The channel.
@@ -158,6 +161,15 @@ fn same_tape(a: &Tape, b: &Tape) -> bool {
         })
 }
 
+/// The channel's expression as the stack evaluates it: real powers with
+/// whole exponents as integer powers (a few multiplications instead of the
+/// exp/ln kernels: a few f32 roundings, far below the half level of 1/510
+/// that could move a level, so within one level of the exact value as
+/// before).
+fn channel_expr(shape: &Shape, channel: usize) -> microfrep_core::Expr {
+    shape.attributes()[channel].expr.with_integer_powers()
+}
+
 /// Rough cost per point of evaluating `t` in batches, in units of one
 /// vectorised add: the transcendental kernels (f64 polynomials, and the
 /// scalar library calls for the rarer ones) weigh tens of simple steps, so
@@ -263,7 +275,7 @@ impl AttributeStack {
         }
         Ok(AttributeStack {
             channel,
-            tape: Tape::new(&shape.attributes()[channel].expr),
+            tape: Tape::new(&channel_expr(shape, channel)),
         })
     }
 
@@ -549,7 +561,8 @@ fn tile_mask(vals: &[f32; TILE]) -> u64 {
 }
 
 /// The grey levels of layer `k` the straightforward way, for tests: the
-/// shape's whole output tape evaluated at every pixel centre.
+/// shape's value and the channel as the stack evaluates it (with integer
+/// powers) compiled together, evaluated at every pixel centre.
 #[doc(hidden)]
 pub fn reference_layer_pixels(
     shape: &Shape,
@@ -559,8 +572,9 @@ pub fn reference_layer_pixels(
 ) -> Vec<u8> {
     let layer = rasterize(shape, grid, k);
     let (nx, ny) = (grid.nx, grid.ny);
-    let mut ev = BatchEval::new(shape.outputs());
-    let out = shape.attribute_output(channel);
+    let both = Tape::with_outputs(&[shape.value().clone(), channel_expr(shape, channel)]);
+    let mut ev = BatchEval::new(&both);
+    let out = 1;
     let mut pixels = vec![0u8; nx * ny];
     let (mut x, mut y, mut z) = (vec![0f32; nx], vec![0f32; nx], vec![0f32; nx]);
     let mut s = vec![0f32; nx];
