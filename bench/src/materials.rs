@@ -134,10 +134,11 @@ fn one(case: &Case, shape: &Shape) -> Result<(), String> {
     // Interleaved repetitions, so load from other processes spreads over
     // all three kinds alike.
     let (mut ta, mut tb, mut tc) = (Vec::new(), Vec::new(), Vec::new());
-    // `bench/run materials CASE KIND` (KIND plain, attribute or materials)
-    // times one kind alone, for profiling; its ratios are then meaningless.
+    // `bench/run materials CASE KINDS` (comma-separated: plain, attribute,
+    // materials) times those kinds alone, for profiling or comparing two;
+    // the ratios of kinds left out are meaningless.
     let kind = std::env::args().nth(3);
-    let on = |k: &str| kind.as_deref().is_none_or(|o| o == k);
+    let on = |k: &str| kind.as_deref().is_none_or(|o| o.split(',').any(|o| o == k));
     for _ in 0..REPS {
         ta.push(timed(&da, || {
             if !on("plain") {
