@@ -25,7 +25,7 @@ use std::path::Path;
 /// that cost a fifth of the evaluation are evaluated with the exactly
 /// simplified tape (the evaluators of a few such tapes kept per thread),
 /// and the inside pixels of the rest join full blocks of their tape's
-/// evaluator. Tile sizes whose bounds never paid on a layer's middle band
+/// evaluator. Tile sizes whose bounds did not pay on a layer's probe bands
 /// are bounded only now and then on its other bands. Every grey level is
 /// the one f32 evaluation of the whole channel at the pixel centre gives
 /// (with its real powers of whole exponents evaluated as integer powers,
@@ -39,18 +39,28 @@ pub struct AttributeStack {
     tape: Tape,
 }
 
-/// Whether bounding tiles of one size paid (filled the tile or gave it a
-/// shorter tape) on a layer's probe band: on models whose bounds are too
-/// wide to decide anything (long channels, where bounding a tile costs as
-/// much as sampling many pixels) the other bands bound tiles of that size
-/// only now and then. The probe is one fixed band, so which tiles are
-/// bounded is the same on every run (and bounding changes only the time,
-/// not a level, anyway).
+/// What bounding tiles of one size cost and gained (filled tiles, shorter
+/// tapes) on a layer's probe bands: on models whose bounds are too wide to
+/// decide anything (long channels, where bounding a tile costs as much as
+/// sampling many pixels) or decide too little, the other bands bound tiles
+/// of that size only now and then. The probes are the bands nearest the
+/// middle, taken in a fixed order until one bounded tiles, so which tiles
+/// are bounded is the same on every run (and bounding changes only the
+/// time, not a level, anyway).
 #[derive(Clone, Copy, Debug, Default)]
 struct Payoff {
     tries: u32,
-    useful: u32,
+    /// Sum of the [`tape_cost`] of the tapes bounded.
+    spent: u64,
+    /// Sum over filled or shortened tiles of inside pixels times the cost
+    /// per pixel saved.
+    gained: u64,
 }
+
+/// The cost of bounding a tile in pixels sampled with the same tape: one
+/// interval step (f64 with outward rounding, scalar, library powers) costs
+/// about as much as one batch step on this many pixels.
+const BOUND_PIXELS: u64 = 64;
 
 impl Payoff {
     /// The entry for tiles of `size`: over 32 pixels, over 16, the rest.
@@ -62,10 +72,20 @@ impl Payoff {
         }
     }
 
-    /// Whether bounding these tiles paid: fewer than 2 tries tell nothing,
-    /// else at least 1 in 16 paid.
+    fn add(self, o: Payoff) -> Payoff {
+        Payoff {
+            tries: self.tries + o.tries,
+            spent: self.spent + o.spent,
+            gained: self.gained + o.gained,
+        }
+    }
+
+    /// Whether bounding these tiles may pay: fewer than 2 tries tell
+    /// nothing, else the sampling saved must have been at least a quarter
+    /// of the bounding (a few probed tiles are a rough guide; bounding in
+    /// vain costs less than missing fills and shorter tapes).
     fn paid(self) -> bool {
-        self.tries < 2 || 16 * self.useful >= self.tries
+        self.tries < 2 || 4 * self.gained >= BOUND_PIXELS * self.spent
     }
 }
 
@@ -97,10 +117,13 @@ impl Policy {
         s[level] % 16 == 0
     }
 
-    fn record(&self, level: usize, useful: bool) {
+    /// A tile of `level` bounded with a tape of `cost`, saving `gained`
+    /// (inside pixels times cost per pixel).
+    fn record(&self, level: usize, cost: u32, gained: u64) {
         let mut s = self.seen.get();
         s[level].tries += 1;
-        s[level].useful += u32::from(useful);
+        s[level].spent += u64::from(cost);
+        s[level].gained += gained;
         self.seen.set(s);
     }
 }
@@ -295,7 +318,7 @@ impl AttributeStack {
         // Bands of BAND image rows counted from the bottom (j), stored top
         // row first: band b holds rows j0..j0 + h at pixel rows
         // ny - j0 - h .. ny - j0. Cut the buffer from its end.
-        let mut bands: Vec<(usize, &mut [u8])> = {
+        let bands: Vec<(usize, &mut [u8])> = {
             let mut out = Vec::new();
             let mut rest = &mut pixels[..];
             let mut j0 = 0;
@@ -355,13 +378,28 @@ impl AttributeStack {
             w.finish(rows);
             band.policy.seen.get()
         };
-        // The middle band first, bounding every tile it may.
-        let probe = bands.remove(bands.len() / 2);
-        let seen = band(&mut init(), probe, [true; 3]);
+        // Probe bands first, one at a time from the middle outwards until
+        // one has bounded tiles, bounding every tile they may; then the
+        // others in parallel, bounding the sizes that paid there.
+        let mid = bands.len() / 2;
+        let mut order: Vec<_> = bands.into_iter().enumerate().collect();
+        order.sort_by_key(|(b, _)| (b.abs_diff(mid), *b));
+        let mut rest = order.into_iter().map(|(_, b)| b);
+        let mut seen = [Payoff::default(); 3];
+        let mut state = init();
+        for b in rest.by_ref() {
+            let s = band(&mut state, b, [true; 3]);
+            seen = std::array::from_fn(|l| seen[l].add(s[l]));
+            if seen[0].tries + seen[1].tries >= 2 {
+                break;
+            }
+        }
         let bound = seen.map(Payoff::paid);
-        bands.into_par_iter().for_each_init(init, |s, b| {
-            band(s, b, bound);
-        });
+        rest.collect::<Vec<_>>()
+            .into_par_iter()
+            .for_each_init(init, |s, b| {
+                band(s, b, bound);
+            });
         (pixels, bound)
     }
 }
@@ -427,8 +465,14 @@ impl Band<'_> {
         let b = ev
             .interval
             .eval(xs, ys, Interval::with_f32_ends(self.z, self.z));
+        let inside = || -> u64 {
+            (at[1]..at[1] + size[1])
+                .map(|j| u64::from(self.inside(j, &cols).count_ones()))
+                .sum()
+        };
         if let Some(g) = uniform_grey(b) {
-            self.policy.record(level, true);
+            self.policy
+                .record(level, ev.cost, inside() * u64::from(ev.cost));
             if g != 0 {
                 let all = if size[0] == 64 {
                     u64::MAX
@@ -459,14 +503,17 @@ impl Band<'_> {
             let short = ev
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
-                .filter(|t| 10 * tape_cost(t) < 8 * ev.cost);
-            self.policy.record(level, short.is_some());
-            if let Some(t) = short {
+                .map(|t| (tape_cost(&t), t))
+                .filter(|(c, _)| 10 * c < 8 * ev.cost);
+            let saved = short.as_ref().map_or(0, |(c, _)| ev.cost - c);
+            self.policy
+                .record(level, ev.cost, inside() * u64::from(saved));
+            if let Some((_, t)) = short {
                 // The same bounds with the shorter tape: go on splitting.
                 e = w.find_or_add(t);
             }
         } else {
-            self.policy.record(level, false);
+            self.policy.record(level, ev.cost, 0);
         }
         self.split_or_sample(w, e, rows, at, size, near)
     }
@@ -716,7 +763,7 @@ mod tests {
                 "layer {k}"
             );
         }
-        // The layer through the middle: its probe band found neither large
+        // The layer through the middle: its probe bands found neither large
         // size worth bounding (small tiles are bounded only below parents
         // near one level, so never here), and the levels are the same.
         let k = grid.layers / 2;
