@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use std::cell::Cell;
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 /// 8-bit grey layers of attribute channel `channel` (0-based index into
 /// [`Shape::attributes`]).
@@ -37,6 +38,8 @@ pub struct AttributeStack {
     pub channel: usize,
     /// The channel's expression alone.
     tape: Tape,
+    /// Shorter tapes of the channel met so far.
+    known: Arc<Known>,
 }
 
 /// What bounding tiles of one size cost and gained (filled tiles, shorter
@@ -215,23 +218,49 @@ fn tape_cost(t: &Tape) -> u32 {
         .sum()
 }
 
+/// Shorter tapes met so far by a stack, shared by its threads and layers:
+/// a tape found here comes with its batch lowering made (once per tape,
+/// not once per layer and thread).
+#[derive(Debug, Default)]
+struct Known(Mutex<Vec<Tape>>);
+
+/// Tapes [`Known`] keeps (the first met).
+const KNOWN_TAPES: usize = 64;
+
+impl Known {
+    /// The known tape equal to `t`, or `t`, now known if there is room.
+    fn get(&self, t: Tape) -> Tape {
+        let Ok(mut known) = self.0.lock() else {
+            return t;
+        };
+        if let Some(k) = known.iter().find(|k| same_tape(k, &t)) {
+            return k.clone();
+        }
+        if known.len() < KNOWN_TAPES {
+            known.push(t.clone());
+        }
+        t
+    }
+}
+
 /// Simplified tapes kept per thread (with their evaluators, which are
 /// costly to make: tiles of one model mostly decide the same branches).
 const CACHED_TAPES: usize = 8;
 
 /// One thread's evaluators: the channel's (index 0) and those of the
 /// shorter tapes tiles were given, in the order they were first needed.
-struct Worker {
+struct Worker<'a> {
     evals: Vec<Evals>,
+    known: &'a Known,
 }
 
-impl Worker {
+impl Worker<'_> {
     /// The index of the evaluator of `t`, made if new.
     fn find_or_add(&mut self, t: Tape) -> usize {
         if let Some(e) = (1..self.evals.len()).find(|&e| same_tape(&self.evals[e].tape, &t)) {
             return e;
         }
-        self.evals.push(Evals::new(&t));
+        self.evals.push(Evals::new(&self.known.get(t)));
         self.evals.len() - 1
     }
 
@@ -299,6 +328,7 @@ impl AttributeStack {
         Ok(AttributeStack {
             channel,
             tape: Tape::new(&channel_expr(shape, channel)),
+            known: Arc::default(),
         })
     }
 
@@ -307,13 +337,13 @@ impl AttributeStack {
         self.levels(shape, grid, k).0
     }
 
-    /// [`AttributeStack::layer_pixels`], and which tile sizes the probe
-    /// band found worth bounding.
-    fn levels(&self, shape: &Shape, grid: &SliceGrid, k: usize) -> (Vec<u8>, [bool; 3]) {
+    /// [`AttributeStack::layer_pixels`], which tile sizes the probe bands
+    /// found worth bounding, and the number of pixels with a level above 0.
+    fn levels(&self, shape: &Shape, grid: &SliceGrid, k: usize) -> (Vec<u8>, [bool; 3], u64) {
         let (nx, ny) = (grid.nx, grid.ny);
         let mut pixels = vec![0u8; nx * ny];
         if nx == 0 || ny == 0 {
-            return (pixels, [true; 3]);
+            return (pixels, [true; 3], 0);
         }
         // Bands of BAND image rows counted from the bottom (j), stored top
         // row first: band b holds rows j0..j0 + h at pixel rows
@@ -343,21 +373,23 @@ impl AttributeStack {
                 Interval::with_f32_ends(grid.y(0), grid.y(ny - 1)),
                 Interval::with_f32_ends(z, z),
             );
-            self.tape
-                .simplify(iv.values(), Simplify::Exact)
-                .unwrap_or_else(|| self.tape.clone())
+            match self.tape.simplify(iv.values(), Simplify::Exact) {
+                Some(t) => self.known.get(t),
+                None => self.tape.clone(),
+            }
         };
         let tiles = nx.div_ceil(TILE);
         let init = || {
             let w = Worker {
                 evals: vec![Evals::new(&tape)],
+                known: &self.known,
             };
             (BandRaster::new(shape), w, Vec::new())
         };
         // Each band is sampled (the shape's value, as `rasterize` samples
         // it) and then graded while its values are in cache.
-        type State = (BandRaster, Worker, Vec<f32>);
-        let band = |(raster, w, values): &mut State, (j0, rows): (usize, &mut [u8]), bound| {
+        type State<'a> = (BandRaster, Worker<'a>, Vec<f32>);
+        let band = |(raster, w, values): &mut State<'_>, (j0, rows): (usize, &mut [u8]), bound| {
             let h = rows.len() / nx;
             values.resize(h * nx, 0.0);
             raster.band(grid, z, j0, values);
@@ -376,7 +408,9 @@ impl AttributeStack {
                 band.tile(w, 0, rows, [i0, j0], [tw, h], true);
             }
             w.finish(rows);
-            band.policy.seen.get()
+            // The band's pixels with a level, counted while in cache.
+            let solid = rows.iter().map(|&v| u64::from(v > 0)).sum::<u64>();
+            (band.policy.seen.get(), solid)
         };
         // Probe bands first, one at a time from the middle outwards until
         // one has bounded tiles, bounding every tile they may; then the
@@ -385,22 +419,23 @@ impl AttributeStack {
         let mut order: Vec<_> = bands.into_iter().enumerate().collect();
         order.sort_by_key(|(b, _)| (b.abs_diff(mid), *b));
         let mut rest = order.into_iter().map(|(_, b)| b);
-        let mut seen = [Payoff::default(); 3];
+        let (mut seen, mut solid) = ([Payoff::default(); 3], 0);
         let mut state = init();
         for b in rest.by_ref() {
-            let s = band(&mut state, b, [true; 3]);
+            let (s, n) = band(&mut state, b, [true; 3]);
             seen = std::array::from_fn(|l| seen[l].add(s[l]));
+            solid += n;
             if seen[0].tries + seen[1].tries >= 2 {
                 break;
             }
         }
         let bound = seen.map(Payoff::paid);
-        rest.collect::<Vec<_>>()
+        solid += rest
+            .collect::<Vec<_>>()
             .into_par_iter()
-            .for_each_init(init, |s, b| {
-                band(s, b, bound);
-            });
-        (pixels, bound)
+            .map_init(init, |s, b| band(s, b, bound).1)
+            .sum::<u64>();
+        (pixels, bound, solid)
     }
 }
 
@@ -654,8 +689,7 @@ impl StackFormat for AttributeStack {
         k: usize,
         path: &Path,
     ) -> Result<(Vec<u8>, u64)> {
-        let pixels = self.layer_pixels(shape, grid, k);
-        let solid = pixels.iter().filter(|&&v| v > 0).count() as u64;
+        let (pixels, _, solid) = self.levels(shape, grid, k);
         // The levels go to the encoder as they are (no copy).
         let img = microfrep_io::png::Image {
             width: grid.nx,
@@ -697,7 +731,7 @@ impl StackFormat for AttributeStack {
 
 #[cfg(test)]
 mod tests {
-    use super::{grey, inside_masks, tile_mask, Evals, Worker, CACHED_TAPES, TILE};
+    use super::{grey, inside_masks, tile_mask, Evals, Known, Worker, CACHED_TAPES, TILE};
     use microfrep_core::{BatchEval, Expr, Tape, BLOCK};
 
     /// More shorter tapes than a worker keeps, each with pixels waiting:
@@ -711,8 +745,10 @@ mod tests {
             .map(|k| Tape::new(&(0.02 * k as f64 + 0.5 * (&x * (1.0 + k as f64)).sin().abs())))
             .collect();
         let root = Tape::new(&(&x * 0.0 + 0.25));
+        let known = Known::default();
         let mut w = Worker {
             evals: vec![Evals::new(&root)],
+            known: &known,
         };
         let mut rows = vec![0u8; (tapes.len() + 1) * BLOCK];
         let mut want = vec![0u8; rows.len()];
@@ -767,8 +803,9 @@ mod tests {
         // size worth bounding (small tiles are bounded only below parents
         // near one level, so never here), and the levels are the same.
         let k = grid.layers / 2;
-        let (fast, bound) = stack.levels(&shape, &grid, k);
+        let (fast, bound, solid) = stack.levels(&shape, &grid, k);
         assert_eq!(bound[..2], [false; 2]);
+        assert_eq!(solid, fast.iter().filter(|&&v| v > 0).count() as u64);
         assert_eq!(fast, reference_layer_pixels(&shape, &grid, k, 0));
     }
 
