@@ -137,6 +137,9 @@ struct Evals {
     tape: Tape,
     /// [`tape_cost`] of the tape.
     cost: u32,
+    /// Whether the tape has steps exact simplification can cut (`min`,
+    /// `max`, `select`).
+    branches: bool,
     batch: BatchEval,
     interval: IntervalEval,
     /// Indices into the band's buffer of the `n` pixels loaded so far.
@@ -149,6 +152,10 @@ impl Evals {
         Evals {
             tape: tape.clone(),
             cost: tape_cost(tape),
+            branches: tape.ops().iter().any(|op| {
+                use microfrep_core::{BinaryOp as B, Op};
+                matches!(op, Op::Binary(B::Min | B::Max, ..) | Op::Select(..))
+            }),
             batch: BatchEval::new(tape),
             interval: IntervalEval::new(tape),
             idx: Box::new([0; BLOCK]),
@@ -534,7 +541,7 @@ impl Band<'_> {
             && b.lo <= b.hi
             && grey(b.hi as f32).saturating_sub(grey(b.lo as f32)) <= CLOSE_LEVELS;
         let mut e = e;
-        if big {
+        if big && ev.branches {
             let short = ev
                 .tape
                 .simplify(ev.interval.values(), Simplify::Exact)
