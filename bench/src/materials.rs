@@ -9,7 +9,9 @@
 //! each written to a fresh directory under the temporary directory through
 //! the library calls the CLI makes. Median of `REPS` interleaved runs; the
 //! ratios are
-//! `ratio_attribute = b / a` and `ratio_materials = c / a`.
+//! `ratio_attribute = b / a` and `ratio_materials = c / a`; the `cpu_`
+//! ratios are the same of the CPU time all threads spent (less disturbed
+//! by other processes on a shared machine than wall time).
 
 use microfrep::fab::{write_stack, AttributeStack, Format, SliceGrid};
 use microfrep::graded::stack::{
@@ -57,12 +59,25 @@ fn median(mut ts: Vec<f64>) -> f64 {
     ts[ts.len() / 2]
 }
 
-/// Wall time of `f` on a fresh `dir`.
-fn timed(dir: &Path, f: impl FnOnce() -> Result<(), String>) -> Result<f64, String> {
+/// CPU seconds run so far by all threads of the process (Linux
+/// `/proc/self/task/*/schedstat`; 0 where that cannot be read).
+fn cpu_seconds() -> f64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return 0.0;
+    };
+    let ns: u64 = tasks
+        .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum();
+    ns as f64 * 1e-9
+}
+
+/// Wall and CPU time of `f` on a fresh `dir`.
+fn timed(dir: &Path, f: impl FnOnce() -> Result<(), String>) -> Result<(f64, f64), String> {
     let _ = std::fs::remove_dir_all(dir);
-    let t = Instant::now();
+    let (t, c) = (Instant::now(), cpu_seconds());
     f()?;
-    Ok(t.elapsed().as_secs_f64())
+    Ok((t.elapsed().as_secs_f64(), cpu_seconds() - c))
 }
 
 /// Bytes of the files in `dir`.
@@ -119,15 +134,29 @@ fn one(case: &Case, shape: &Shape) -> Result<(), String> {
     // Interleaved repetitions, so load from other processes spreads over
     // all three kinds alike.
     let (mut ta, mut tb, mut tc) = (Vec::new(), Vec::new(), Vec::new());
+    // `bench/run materials CASE KINDS` (comma-separated: plain, attribute,
+    // materials) times those kinds alone, for profiling or comparing two;
+    // the ratios of kinds left out are meaningless.
+    let kind = std::env::args().nth(3);
+    let on = |k: &str| kind.as_deref().is_none_or(|o| o.split(',').any(|o| o == k));
     for _ in 0..REPS {
         ta.push(timed(&da, || {
+            if !on("plain") {
+                return Ok(());
+            }
             write_stack(shape, &grid, &Format::Png { aa: false }, &da, &|| {})
                 .map_err(|e| e.to_string())
         })?);
         tb.push(timed(&db, || {
+            if !on("attribute") {
+                return Ok(());
+            }
             write_stack(shape, &grid, &attr, &db, &|| {}).map_err(|e| e.to_string())
         })?);
         tc.push(timed(&dc, || {
+            if !on("materials") {
+                return Ok(());
+            }
             let src =
                 ShapeSource::new(shape, &sgrid, opts.palette.len()).map_err(|e| e.to_string())?;
             let mut source = |k: usize, f: &mut [f32], m: &mut [bool]| src.fill(k, f, m);
@@ -137,8 +166,11 @@ fn one(case: &Case, shape: &Shape) -> Result<(), String> {
             Ok(())
         })?);
     }
-    let (plain, attribute, materials) = (median(ta), median(tb), median(tc));
-    let report = report.expect("REPS > 0");
+    let wall = |t: &[(f64, f64)]| median(t.iter().map(|p| p.0).collect());
+    let cpu = |t: &[(f64, f64)]| median(t.iter().map(|p| p.1).collect());
+    let (plain, attribute, materials) = (wall(&ta), wall(&tb), wall(&tc));
+    let (plain_cpu, attribute_cpu, materials_cpu) = (cpu(&ta), cpu(&tb), cpu(&tc));
+    let inside = report.map_or(0, |r| r.dither.inside);
     let bytes = [dir_bytes(&da), dir_bytes(&db), dir_bytes(&dc)];
     for d in [&da, &db, &dc] {
         let _ = std::fs::remove_dir_all(d);
@@ -146,6 +178,8 @@ fn one(case: &Case, shape: &Shape) -> Result<(), String> {
     println!(
         "RESULT {}_{}x{}x{} plain_s={plain:.3} attribute_s={attribute:.3} \
          materials_s={materials:.3} ratio_attribute={:.2} ratio_materials={:.2} \
+         plain_cpu_s={plain_cpu:.3} attribute_cpu_s={attribute_cpu:.3} \
+         materials_cpu_s={materials_cpu:.3} cpu_ratio_attribute={:.2} cpu_ratio_materials={:.2} \
          inside_voxels={} plain_bytes={} attribute_bytes={} materials_bytes={} threads={THREADS}",
         case.name,
         grid.nx,
@@ -153,7 +187,9 @@ fn one(case: &Case, shape: &Shape) -> Result<(), String> {
         grid.layers,
         attribute / plain,
         materials / plain,
-        report.dither.inside,
+        attribute_cpu / plain_cpu,
+        materials_cpu / plain_cpu,
+        inside,
         bytes[0],
         bytes[1],
         bytes[2],

@@ -449,6 +449,66 @@ impl Expr {
         memo[&key(self)].clone()
     }
 
+    /// This expression with every real power whose exponent is a whole
+    /// constant `n`, `|n| <= 16`, written as the integer power `powi(n)`:
+    /// the same function (also for negative, zero, infinite and NaN bases),
+    /// evaluated by a few multiplications instead of the exp/ln kernels, at
+    /// the price of a few roundings (about `|n|` ulps in f32, so batch
+    /// values may differ from the original's in their last bits). For
+    /// consumers that quantise values far more coarsely than that.
+    /// Subexpressions without such powers are shared with `self`.
+    pub fn with_integer_powers(&self) -> Expr {
+        let key = |e: &Expr| Arc::as_ptr(&e.0);
+        let mut memo: HashMap<*const ExprNode, Expr> = HashMap::new();
+        let mut stack: Vec<(&Expr, bool)> = vec![(self, false)];
+        while let Some((cur, expanded)) = stack.pop() {
+            if memo.contains_key(&key(cur)) {
+                continue;
+            }
+            if !expanded {
+                stack.push((cur, true));
+                for c in cur.children() {
+                    if !memo.contains_key(&key(c)) {
+                        stack.push((c, false));
+                    }
+                }
+                continue;
+            }
+            let m = |c: &Expr| memo[&key(c)].clone();
+            let whole = |e: &Expr| {
+                e.as_const()
+                    .filter(|c| c.fract() == 0.0 && c.abs() <= 16.0)
+                    .map(|c| c as i32)
+            };
+            let unchanged = cur
+                .children()
+                .iter()
+                .all(|&c| Arc::ptr_eq(&memo[&key(c)].0, &c.0));
+            let out = match cur.node() {
+                ExprNode::Binary(BinaryOp::Pow, a, b) if whole(b).is_some() => {
+                    m(a).powi(whole(b).unwrap_or(1))
+                }
+                _ if unchanged => cur.clone(),
+                ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => cur.clone(),
+                ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
+                ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
+                ExprNode::PowI(a, n) => m(a).powi(*n),
+                ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
+                ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)),
+                ExprNode::Blend { op, args } => {
+                    Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
+                }
+                ExprNode::Field { field, comp, args } => Expr::field_comp(
+                    field.clone(),
+                    *comp,
+                    [m(&args[0]), m(&args[1]), m(&args[2])],
+                ),
+            };
+            memo.insert(key(cur), out);
+        }
+        memo[&key(self)].clone()
+    }
+
     /// Number of distinct tree nodes (by pointer), a size measure for tests and reports.
     pub fn node_count(&self) -> usize {
         let mut seen = std::collections::HashSet::new();

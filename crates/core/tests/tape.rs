@@ -138,3 +138,101 @@ fn constants_fold_in_tape() {
     // -(-x) is x: no instruction at all.
     assert!(Tape::new(&(-(-x.clone()))).is_empty());
 }
+
+/// Real powers with whole constant exponents become integer powers: the
+/// same values in f64 (to rounding) for every kind of base, other powers
+/// untouched, nodes without such powers shared, and through field nodes
+/// and their partials (a field's gradient expression) too.
+#[test]
+fn integer_powers_keep_values() {
+    use microfrep_core::GridField;
+    use std::sync::Arc;
+    let [x, y, z] = Expr::xyz();
+    let plain = (&x * 2.0).sin() + &y;
+    let mut parts = vec![plain.clone()];
+    for n in -6..=6 {
+        parts.push((&x - 0.5).pow(n as f64) * 0.01);
+    }
+    let field = GridField::new(
+        "g",
+        [3, 3, 3],
+        [-1.0; 3],
+        [1.0; 3],
+        (0..27).map(|i| (i % 5) as f64 * 0.3).collect(),
+    )
+    .unwrap();
+    let mapped = Expr::field_at(Arc::new(field), [x.pow(3.0), y.clone(), z.pow(2.0)]);
+    let [gx, _, gz] = mapped.gradient();
+    parts.extend([mapped, gx, gz]);
+    let kept = [x.pow(2.5), x.pow(17.0), x.pow(&y)];
+    let e = parts
+        .iter()
+        .chain(&kept)
+        .fold(Expr::constant(0.0), |s, p| s + p);
+    let r = e.with_integer_powers();
+    // Only the three powers that are not whole (or too large) remain.
+    let count = |t: &Tape| t.listing().matches(" pow ").count();
+    assert_eq!(
+        count(&Tape::new(&e)),
+        13 + 2 + 2 + 3,
+        "{}",
+        Tape::new(&e).listing()
+    );
+    assert_eq!(count(&Tape::new(&r)), 3, "{}", Tape::new(&r).listing());
+    for p in &kept {
+        assert!(std::ptr::eq(p.with_integer_powers().node(), p.node()));
+    }
+    assert!(std::ptr::eq(
+        plain.with_integer_powers().node(),
+        plain.node()
+    ));
+    let (mut a, mut b) = (
+        PointEval::new(&Tape::new(&e)),
+        PointEval::new(&Tape::new(&r)),
+    );
+    let bases = [
+        -2.0,
+        -1.0,
+        -0.25,
+        0.0,
+        0.5,
+        0.75,
+        1.5,
+        3.0,
+        f64::INFINITY,
+        f64::NAN,
+    ];
+    for &bx in &bases {
+        for &by in &[0.3, 2.0] {
+            for &bz in &[-0.6, 0.0, 0.4] {
+                let (u, v) = (a.eval([bx, by, bz]), b.eval([bx, by, bz]));
+                assert!(
+                    u == v || (u - v).abs() <= 1e-12 * u.abs() || (u.is_nan() && v.is_nan()),
+                    "at ({bx}, {by}, {bz}): {u} vs {v}"
+                );
+            }
+        }
+    }
+    // Each power on its own, at the special bases.
+    for n in -6..=6 {
+        let one = Tape::new(&x.pow(n as f64).with_integer_powers());
+        let mut pe = PointEval::new(&one);
+        for &bx in &[
+            -2.0,
+            -0.0,
+            0.0,
+            0.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ] {
+            let (got, want) = (pe.eval([bx, 0.0, 0.0]), bx.powf(n as f64));
+            assert!(
+                got == want
+                    || (got - want).abs() <= 1e-15 * want.abs()
+                    || (got.is_nan() && want.is_nan()),
+                "{bx}^{n}: {got} vs {want}"
+            );
+        }
+    }
+}

@@ -84,18 +84,39 @@ pub fn rasterize_at(shape: &Shape, grid: &SliceGrid, z: f64) -> LayerValues {
 pub fn rasterize_with(shape: &Shape, grid: &SliceGrid, z: f64, simplify: bool) -> LayerValues {
     let (nx, ny) = (grid.nx, grid.ny);
     let mut values = vec![0.0f32; nx * ny];
-    values.par_chunks_mut(TILE * nx).enumerate().for_each_init(
-        || Evals::new(shape.tape(), simplify),
-        |ev, (tr, rows)| {
-            let j0 = tr * TILE;
-            let h = rows.len() / nx;
-            for i0 in (0..nx).step_by(TILE) {
-                let w = TILE.min(nx - i0);
-                tile(ev, grid, z, rows, [i0, j0], [w, h], j0);
-            }
-        },
+    values.par_chunks_mut(BAND * nx).enumerate().for_each_init(
+        || BandRaster(Evals::new(shape.tape(), simplify)),
+        |r, (b, rows)| r.band(grid, z, b * BAND, rows),
     );
     LayerValues { nx, ny, z, values }
+}
+
+/// Rows in a band of [`BandRaster::band`]: bands start at multiples of it.
+pub(crate) const BAND: usize = TILE;
+
+/// One thread's evaluators for sampling a layer band by band, as
+/// [`rasterize_at`] does (the same values), for consumers that use each band
+/// while it is in cache.
+pub(crate) struct BandRaster(Evals);
+
+impl BandRaster {
+    /// Evaluators of `shape`, shortening tapes per tile.
+    pub(crate) fn new(shape: &Shape) -> BandRaster {
+        BandRaster(Evals::new(shape.tape(), SIMPLIFY_TILES))
+    }
+
+    /// Samples image rows `j0..j0 + rows.len() / nx` at height `z` into
+    /// `rows` (row-major, lowest y first); `j0` is a multiple of [`BAND`]
+    /// and there are at most [`BAND`] rows.
+    pub(crate) fn band(&mut self, grid: &SliceGrid, z: f64, j0: usize, rows: &mut [f32]) {
+        let nx = grid.nx;
+        let h = rows.len() / nx;
+        debug_assert!(j0 % BAND == 0 && h <= BAND);
+        for i0 in (0..nx).step_by(TILE) {
+            let w = TILE.min(nx - i0);
+            tile(&mut self.0, grid, z, rows, [i0, j0], [w, h], j0);
+        }
+    }
 }
 
 /// Classifies the tile at pixel `at` of size `size` and fills its pixels in

@@ -1,15 +1,23 @@
 //! The attribute stack's culled, per-channel evaluation against two
-//! straightforward references: the shape's whole output tape evaluated in
-//! f32 at every pixel centre (the same bytes), and the f64 point evaluator
-//! of the channel at every pixel centre (within one grey level).
+//! straightforward references: the shape's value and the channel (with
+//! integer powers, as the stack evaluates it) compiled together and
+//! evaluated in f32 at every pixel centre (the same bytes), and the f64
+//! point evaluator of the channel as given at every pixel centre (within
+//! one grey level).
 
 use microfrep_core::{Expr, PointEval, Shape, Tape};
 use microfrep_fab::attribute::reference_layer_pixels;
 use microfrep_fab::{rasterize, AttributeStack, SliceGrid};
 
-/// A ball of radius 1 with a hole along z, graded three ways: a smooth
-/// field above z = 0.2 and 0 below (a branch intervals decide), a radial
-/// field clamped at both ends, and a square root NaN where x < -0.5.
+/// A ball of radius 1 with a hole along z, graded six ways: a smooth
+/// field above z = 0.2 and 0 below (a branch intervals decide, whole layers
+/// at once), a radial field clamped at both ends, a square root NaN where
+/// x < -0.5, Schlick's gain of the radius (two powers, one of which tiles
+/// away from the middle radius cut: a shorter tape by cost, not by steps),
+/// steps of powers switched on along x (tiles keep different sets, so
+/// many shorter tapes are in use at once), and powers with whole exponents
+/// (odd of negative bases, negative), which the stack evaluates as integer
+/// powers.
 fn graded_ball() -> Shape {
     let [x, y, z] = Expr::xyz();
     let r2 = x.square() + y.square() + z.square();
@@ -20,10 +28,29 @@ fn graded_ball() -> Shape {
     let s1 = Expr::select(z.ge(0.2), smooth, Expr::constant(0.0));
     let s2 = 1.6 - 2.0 * &r2;
     let s3 = (&x + 0.5).sqrt();
+    let t = (1.0 - r2.sqrt()).max(0.0).min(1.0);
+    let gain = Expr::select(
+        t.lt(0.5),
+        0.5 * (2.0 * &t).pow(1.7),
+        1.0 - 0.5 * (2.0 - 2.0 * &t).pow(1.7),
+    );
+    let mut steps = Expr::constant(0.05);
+    for k in 0..24 {
+        let at = -0.95 + 0.08 * k as f64;
+        let power = (&x + 1.5).pow(1.1 + 0.03 * k as f64) * 0.02;
+        steps = steps + Expr::select(x.gt(at), power, Expr::constant(0.0));
+    }
     Shape::new(value)
         .with_attribute("s1", s1)
         .with_attribute("s2", s2)
         .with_attribute("s3", s3)
+        .with_attribute("gain", gain)
+        .with_attribute("steps", steps)
+        .with_attribute(
+            "whole",
+            0.5 + 0.6 * (&x - 0.2).pow(3.0) - 0.3 * (&y + 0.1).pow(4.0)
+                + 0.05 * (&z + 1.5).pow(-2.0),
+        )
 }
 
 #[test]
@@ -31,7 +58,7 @@ fn culled_attribute_layers_equal_full_evaluation() {
     let shape = graded_ball();
     let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.07, 0.011).unwrap();
     assert!(grid.nx > 150 && grid.layers > 20);
-    for channel in 0..3 {
+    for channel in 0..6 {
         let stack = AttributeStack::new(&shape, channel).unwrap();
         let attr = Tape::new(&shape.attributes()[channel].expr);
         let mut point = PointEval::new(&attr);
@@ -74,9 +101,9 @@ fn culled_attribute_layers_equal_full_evaluation() {
 #[test]
 fn attribute_stack_refuses_missing_channel() {
     let shape = graded_ball();
-    let e = AttributeStack::new(&shape, 3).unwrap_err().to_string();
+    let e = AttributeStack::new(&shape, 6).unwrap_err().to_string();
     assert!(
-        e.contains("attribute 4 does not exist") && e.contains("3 attribute"),
+        e.contains("attribute 7 does not exist") && e.contains("6 attribute"),
         "{e}"
     );
 }

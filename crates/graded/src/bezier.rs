@@ -100,6 +100,9 @@ pub struct BezierBox {
     tol: f64,
     dtol: [f64; 3],
     cond: Option<[f64; 3]>,
+    /// Tags this field's rows in the per-thread [`RowCache`] (clones have
+    /// the same weights, so they share it).
+    id: u64,
 }
 
 fn check_box(min: [f64; 3], max: [f64; 3]) -> Result<()> {
@@ -231,94 +234,160 @@ fn apply_along(net: &mut [f64], deg: [usize; 3], axis: usize, m: &[Vec<f64>]) {
     }
 }
 
-/// Coefficients on `[a, b]` (within `[0, 1]`) of the polynomial with
-/// Bernstein coefficients `c` on `[0, 1]`, in place.
-fn subdivide(c: &mut [f64], a: f64, b: f64) {
-    let n = c.len() - 1;
-    if n == 0 || (a == 0.0 && b == 1.0) {
-        return;
+/// Nets up to this many weights are bounded in buffers on the stack.
+const SMALL_NET: usize = 128;
+
+/// The lines of `net` (dimensions `dims`) along `axis` gathered into
+/// `buf`, coefficient-major: `buf[k * count + q]` is coefficient `k` of line
+/// `q`, for `count = net.len() / dims[axis]` lines (so the de Casteljau
+/// steps below run over all lines at once, in lanes).
+fn gather_lines(net: &[f64], dims: [usize; 3], axis: usize, buf: &mut [f64]) -> usize {
+    let n = dims[axis];
+    let stride = [1, dims[0], dims[0] * dims[1]][axis];
+    let count = net.len() / n;
+    for q in 0..count {
+        // Line q starts at its offset within one slab plus whole slabs.
+        let f = (q % stride) + (q / stride) * stride * n;
+        for k in 0..n {
+            buf[k * count + q] = net[f + k * stride];
+        }
     }
-    if b <= 0.0 {
-        let v = c[0];
-        c.iter_mut().for_each(|x| *x = v);
-        return;
+    count
+}
+
+/// [`gather_lines`] in reverse.
+fn scatter_lines(buf: &[f64], dims: [usize; 3], axis: usize, net: &mut [f64]) {
+    let n = dims[axis];
+    let stride = [1, dims[0], dims[0] * dims[1]][axis];
+    let count = net.len() / n;
+    for q in 0..count {
+        let f = (q % stride) + (q / stride) * stride * n;
+        for k in 0..n {
+            net[f + k * stride] = buf[k * count + q];
+        }
     }
-    // Left part on [0, b]: after the loop work[i] is the first element of
-    // de Casteljau level i at t = b.
-    let mut buf = [0.0; MAX_DEGREE + 1];
-    let work = &mut buf[..=n];
-    work.copy_from_slice(c);
-    if b < 1.0 {
-        for level in 1..=n {
-            for i in (level..=n).rev() {
-                work[i] = (1.0 - b) * work[i - 1] + b * work[i];
+}
+
+/// The value at `t` of each line gathered in `buf` ([`gather_lines`]: `n`
+/// coefficients of `count` lines) into `buf[..count]`, by de Casteljau's
+/// algorithm (convex combinations only).
+fn casteljau_lines(buf: &mut [f64], n: usize, count: usize, t: f64) {
+    let s = 1.0 - t;
+    for level in 1..n {
+        for i in 0..n - level {
+            let (lo, hi) = buf.split_at_mut((i + 1) * count);
+            for (a, &b) in lo[i * count..].iter_mut().zip(&hi[..count]) {
+                *a = s * *a + t * b;
             }
         }
     }
-    // Its right part on [a/b, 1]: after the loop work[i] is element i of
-    // level n - i at s = a/b.
+}
+
+/// The net `net` (dimensions `dims`) at coordinate `t` of `axis`: the net
+/// of one fewer dimension (that axis of length 1, same layout), the values
+/// [`net_range`] collapses it to.
+fn collapse(net: &[f64], dims: [usize; 3], axis: usize, t: f64) -> Vec<f64> {
+    let mut buf = vec![0.0; net.len()];
+    let count = gather_lines(net, dims, axis, &mut buf);
+    casteljau_lines(&mut buf, dims[axis], count, t);
+    buf.truncate(count);
+    buf
+}
+
+/// The Bernstein coefficients on `[a, b]` (within `[0, 1]`) of each line
+/// gathered in `buf` ([`gather_lines`]: `n` coefficients of `count` lines),
+/// in place: de Casteljau at `b` gives the left part on `[0, b]`, then at
+/// `a / b` its right part.
+fn subdivide_lines(buf: &mut [f64], n: usize, count: usize, a: f64, b: f64) {
+    let deg = n - 1;
+    if deg == 0 || (a == 0.0 && b == 1.0) {
+        return;
+    }
+    let buf = &mut buf[..n * count];
+    if b <= 0.0 {
+        let (first, rest) = buf.split_at_mut(count);
+        for r in rest.chunks_mut(count) {
+            r.copy_from_slice(first);
+        }
+        return;
+    }
+    if b < 1.0 {
+        for level in 1..=deg {
+            for i in (level..=deg).rev() {
+                let (lo, hi) = buf.split_at_mut(i * count);
+                for (c, &p) in hi[..count].iter_mut().zip(&lo[(i - 1) * count..]) {
+                    *c = (1.0 - b) * p + b * *c;
+                }
+            }
+        }
+    }
     let s = (a / b).clamp(0.0, 1.0);
     if s > 0.0 {
-        for level in 1..=n {
-            for i in 0..=n - level {
-                work[i] = (1.0 - s) * work[i] + s * work[i + 1];
+        for level in 1..=deg {
+            for i in 0..=deg - level {
+                let (lo, hi) = buf.split_at_mut((i + 1) * count);
+                for (c, &q) in lo[i * count..].iter_mut().zip(&hi[..count]) {
+                    *c = (1.0 - s) * *c + s * q;
+                }
             }
         }
     }
-    c.copy_from_slice(work);
 }
+
+/// Nets collapsed at a flat axis, per thread: `(field id, axis, coordinate
+/// bits, net)`, most recent last. The boxes of one slice's tiles share
+/// their z, so its net is collapsed once per slice and thread.
+type FlatNets = Vec<(u64, usize, u64, Vec<f64>)>;
+
+thread_local! {
+    static FLAT: std::cell::RefCell<FlatNets> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Flat nets kept per thread.
+const CACHED_FLAT: usize = 4;
 
 /// Range of the net `w` (degrees `deg`) over the unit sub-box `u[a]`.
 fn net_range(w: &[f64], deg: [usize; 3], u: [(f64, f64); 3]) -> (f64, f64) {
     if u.iter().all(|&(a, b)| a == 0.0 && b == 1.0) {
         return range_of(w);
     }
-    let mut net = w.to_vec();
+    // The net and scratch for its lines, on the stack when small.
+    let (mut small, mut spare) = ([0.0; SMALL_NET], [0.0; SMALL_NET]);
+    let (mut big, mut big_spare);
+    let (mut net, mut buf): (&mut [f64], &mut [f64]) = if w.len() <= SMALL_NET {
+        (&mut small[..w.len()], &mut spare[..w.len()])
+    } else {
+        big = vec![0.0; w.len()];
+        big_spare = vec![0.0; w.len()];
+        (&mut big[..], &mut big_spare[..])
+    };
+    net.copy_from_slice(w);
     let mut dims = deg.map(|d| d + 1);
-    // Axes of zero width (a slice's fixed z) first: their subdivision makes
-    // every line along them constant (each step `0 * w_i + 1 * w_{i+1}` is
-    // exact), so one slice across them holds all values and the other axes
-    // subdivide only that slice.
+    // Axes of zero width (a slice's fixed z) first: the net collapses to
+    // its values at that coordinate (one slice across the axis), and the
+    // other axes subdivide only that slice.
     let mut order = [0, 1, 2];
     order.sort_by_key(|&a| u[a].0 != u[a].1);
     for axis in order {
         let (a, b) = u[axis];
-        if a == 0.0 && b == 1.0 {
+        let n = dims[axis];
+        if (a == 0.0 && b == 1.0) || n == 1 {
             continue;
         }
-        let stride = match axis {
-            0 => 1,
-            1 => dims[0],
-            _ => dims[0] * dims[1],
-        };
-        let n = dims[axis];
-        let mut line = [0.0; MAX_DEGREE + 1];
-        let line = &mut line[..n];
-        for base in 0..net.len() {
-            if (base / stride) % n != 0 {
-                continue;
-            }
-            for (t, l) in line.iter_mut().enumerate() {
-                *l = net[base + t * stride];
-            }
-            subdivide(line, a, b);
-            for (t, l) in line.iter().enumerate() {
-                net[base + t * stride] = *l;
-            }
-        }
-        if a == b && n > 1 && net.iter().all(|v| v.is_finite()) {
-            // Keep the slice at index 0 along this axis.
-            let mut kept = Vec::with_capacity(net.len() / n);
-            for (idx, &v) in net.iter().enumerate() {
-                if (idx / stride) % n == 0 {
-                    kept.push(v);
-                }
-            }
-            net = kept;
+        let count = gather_lines(net, dims, axis, buf);
+        if a == b {
+            casteljau_lines(buf, n, count, a);
+            // Coefficient 0 of every line is the collapsed net.
+            std::mem::swap(&mut net, &mut buf);
+            net = &mut net[..count];
+            buf = &mut buf[..count];
             dims[axis] = 1;
+        } else {
+            subdivide_lines(buf, n, count, a, b);
+            scatter_lines(buf, dims, axis, net);
         }
     }
-    range_of(&net)
+    range_of(net)
 }
 
 impl BezierBox {
@@ -385,6 +454,7 @@ impl BezierBox {
             tol,
             dtol,
             cond,
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         }
     }
 
@@ -548,8 +618,36 @@ impl Field for BezierBox {
             return Interval::nan();
         }
         let (u, _) = self.unit_box(b);
+        let flat = (0..3).find(|&a| u[a].0 == u[a].1 && self.deg[a] > 0);
         let (lo, hi) = if u.iter().all(|&(a, b)| a == 0.0 && b == 1.0) {
             self.range
+        } else if let Some(a) = flat {
+            // The net at the flat coordinate (the same values `net_range`
+            // would collapse it to), then the other axes.
+            let t = u[a].0;
+            let key = (self.id, a, t.to_bits());
+            let mut d = self.deg;
+            d[a] = 0;
+            let mut rest = u;
+            rest[a] = (0.0, 1.0);
+            let cached = FLAT.with(|c| {
+                let c = c.try_borrow().ok()?;
+                let e = c.iter().find(|e| (e.0, e.1, e.2) == key)?;
+                Some(net_range(&e.3, d, rest))
+            });
+            cached.unwrap_or_else(|| {
+                let net = collapse(&self.w, self.deg.map(|d| d + 1), a, t);
+                let r = net_range(&net, d, rest);
+                FLAT.with(|c| {
+                    if let Ok(mut c) = c.try_borrow_mut() {
+                        if c.len() >= CACHED_FLAT {
+                            c.remove(0);
+                        }
+                        c.push((key.0, key.1, key.2, net));
+                    }
+                });
+                r
+            })
         } else {
             net_range(&self.w, self.deg, u)
         };
@@ -585,8 +683,17 @@ impl Field for BezierBox {
         let param = |a: usize, c: f32| {
             ((c as f64 - self.min[a]) / (self.max[a] - self.min[a])).clamp(0.0, 1.0)
         };
+        // The coefficients of rows met before on this thread (rows of a
+        // slice band recur in every tile along it); without the cache (it
+        // is busy) only the last row's.
+        let mut cache = ROWS.with(|r| r.try_borrow_mut().ok().map(|mut c| std::mem::take(&mut *c)));
         let mut row: Option<(u32, u32)> = None;
         let mut shared = [0.0f64; MAX_DEGREE + 1];
+        // Scratch lanes: each group writes the entries it reads first.
+        let mut b0 = [[0.0f64; LANES]; MAX_DEGREE + 1];
+        let mut c = [[0.0f64; LANES]; MAX_DEGREE + 1];
+        let mut by = [[0.0f64; LANES]; MAX_DEGREE + 1];
+        let mut bz = [[0.0f64; LANES]; MAX_DEGREE + 1];
         let mut q = 0;
         while q < out.len() {
             let len = LANES.min(out.len() - q);
@@ -595,27 +702,34 @@ impl Field for BezierBox {
             for (t, &c) in t.iter_mut().zip(&x[q..q + len]) {
                 *t = param(0, c);
             }
-            let mut b0 = [[0.0f64; LANES]; MAX_DEGREE + 1];
             bernstein_lanes(l, &t, &mut b0);
             let key = (ys[0].to_bits(), zs[0].to_bits());
             let same =
                 ys.iter().all(|v| v.to_bits() == key.0) && zs.iter().all(|v| v.to_bits() == key.1);
-            let mut c = [[0.0f64; LANES]; MAX_DEGREE + 1];
+            let mut val = [-0.0f64; LANES];
             if same {
                 if row != Some(key) {
-                    let mut by = [0.0; MAX_DEGREE + 1];
-                    let mut bz = [0.0; MAX_DEGREE + 1];
-                    bernstein(m, param(1, ys[0]), &mut by, None);
-                    bernstein(n, param(2, zs[0]), &mut bz, None);
-                    self.row_coeffs(&by, &bz, &mut shared);
+                    let hit = cache.as_ref().and_then(|c| c.get(self.id, key));
+                    if let Some(h) = hit {
+                        shared = h;
+                    } else {
+                        let mut by = [0.0; MAX_DEGREE + 1];
+                        let mut bz = [0.0; MAX_DEGREE + 1];
+                        bernstein(m, param(1, ys[0]), &mut by, None);
+                        bernstein(n, param(2, zs[0]), &mut bz, None);
+                        self.row_coeffs(&by, &bz, &mut shared);
+                        if let Some(c) = cache.as_mut() {
+                            c.put(self.id, key, &shared);
+                        }
+                    }
                     row = Some(key);
                 }
-                for (c, &s) in c.iter_mut().zip(&shared).take(l + 1) {
-                    *c = [s; LANES];
+                for i in 0..=l {
+                    for e in 0..LANES {
+                        val[e] += b0[i][e] * shared[i];
+                    }
                 }
             } else {
-                let mut by = [[0.0f64; LANES]; MAX_DEGREE + 1];
-                let mut bz = [[0.0f64; LANES]; MAX_DEGREE + 1];
                 for (a, cs, bs) in [(1, ys, &mut by), (2, zs, &mut bz)] {
                     let mut t = [0.0f64; LANES];
                     for (t, &c) in t.iter_mut().zip(cs) {
@@ -639,11 +753,10 @@ impl Field for BezierBox {
                     }
                     *ci = acc;
                 }
-            }
-            let mut val = [-0.0f64; LANES];
-            for i in 0..=l {
-                for e in 0..LANES {
-                    val[e] += b0[i][e] * c[i][e];
+                for i in 0..=l {
+                    for e in 0..LANES {
+                        val[e] += b0[i][e] * c[i][e];
+                    }
                 }
             }
             for (o, v) in out[q..q + len].iter_mut().zip(val) {
@@ -651,8 +764,53 @@ impl Field for BezierBox {
             }
             q += len;
         }
+        if let Some(c) = cache {
+            ROWS.with(|r| {
+                if let Ok(mut r) = r.try_borrow_mut() {
+                    *r = c;
+                }
+            });
+        }
     }
 }
+
+/// Rows kept by [`RowCache`] (a power of two).
+const CACHED_ROWS: usize = 256;
+
+/// The x coefficients ([`BezierBox::row_coeffs`]) of recently evaluated
+/// rows, per thread: direct-mapped by the row's y and z bits, tagged with
+/// the field's id, so a hit has exactly the bits a fresh computation gives.
+#[derive(Default)]
+struct RowCache {
+    /// `(field id, y bits, z bits, coefficients)`; id 0 is empty.
+    rows: Vec<(u64, (u32, u32), [f64; MAX_DEGREE + 1])>,
+}
+
+impl RowCache {
+    fn slot(key: (u32, u32)) -> usize {
+        let h = (key.0 as u64 | (key.1 as u64) << 32).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        (h >> (64 - CACHED_ROWS.trailing_zeros())) as usize
+    }
+
+    fn get(&self, id: u64, key: (u32, u32)) -> Option<[f64; MAX_DEGREE + 1]> {
+        let e = self.rows.get(Self::slot(key))?;
+        (e.0 == id && e.1 == key).then_some(e.2)
+    }
+
+    fn put(&mut self, id: u64, key: (u32, u32), c: &[f64; MAX_DEGREE + 1]) {
+        if self.rows.is_empty() {
+            self.rows = vec![(0, (0, 0), [0.0; MAX_DEGREE + 1]); CACHED_ROWS];
+        }
+        self.rows[Self::slot(key)] = (id, key, *c);
+    }
+}
+
+thread_local! {
+    static ROWS: std::cell::RefCell<RowCache> = std::cell::RefCell::new(RowCache::default());
+}
+
+/// Source of [`BezierBox`] ids (0 marks an empty [`RowCache`] slot).
+static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 /// Points evaluated together by [`BezierBox`]'s batch evaluation.
 const LANES: usize = 8;
@@ -660,6 +818,24 @@ const LANES: usize = 8;
 /// [`bernstein`] (without derivatives) for `LANES` parameters at once, the
 /// same operations per lane: `out[i][e]` is `B_i^n(t[e])`.
 fn bernstein_lanes(n: usize, t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
+    // Low degrees with their loops unrolled (the same operations).
+    match n {
+        1 => bernstein_lanes_of::<1>(t, out),
+        2 => bernstein_lanes_of::<2>(t, out),
+        3 => bernstein_lanes_of::<3>(t, out),
+        4 => bernstein_lanes_of::<4>(t, out),
+        5 => bernstein_lanes_of::<5>(t, out),
+        _ => bernstein_lanes_of_any(n, t, out),
+    }
+}
+
+#[inline(always)]
+fn bernstein_lanes_of<const N: usize>(t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
+    bernstein_lanes_of_any(N, t, out)
+}
+
+#[inline(always)]
+fn bernstein_lanes_of_any(n: usize, t: &[f64; LANES], out: &mut [[f64; LANES]; MAX_DEGREE + 1]) {
     let mut s = [0.0f64; LANES];
     for e in 0..LANES {
         s[e] = 1.0 - t[e];
@@ -990,11 +1166,17 @@ mod tests {
     /// Interval bounds over boxes flat along one or two axes (a slice's
     /// fixed z, the path that keeps one slice of the net) contain the
     /// values at points of the box, and are tight: the flat box's bounds
-    /// are no wider than the full box's.
+    /// are no wider than the full box's. Nets of 60 weights (bounded in
+    /// stack buffers) and of 336 (on the heap).
     #[test]
     fn flat_boxes_bound_their_values() {
+        for deg in [[3, 2, 4], [6, 5, 7]] {
+            flat_boxes_bound_values_of(deg);
+        }
+    }
+
+    fn flat_boxes_bound_values_of(deg: [usize; 3]) {
         use microfrep_core::Interval;
-        let deg = [3, 2, 4];
         let count = (deg[0] + 1) * (deg[1] + 1) * (deg[2] + 1);
         let w: Vec<f64> = (0..count)
             .map(|i| ((i * 29 % 13) as f64 - 6.0) / 5.0)
@@ -1029,6 +1211,82 @@ mod tests {
                     iv.lo <= v && v <= iv.hi,
                     "case {case}: {v} outside {iv:?} at {p:?}"
                 );
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod cache_tests {
+    use super::{net_range, BezierBox, CACHED_ROWS};
+    use microfrep_core::{Field, Interval};
+
+    /// Two fields of the same degrees and box but different weights.
+    fn pair() -> (BezierBox, BezierBox) {
+        let deg = [3, 3, 2];
+        let n = 4 * 4 * 3;
+        let w1: Vec<f64> = (0..n).map(|i| ((i * 7 % 11) as f64) / 10.0).collect();
+        let w2: Vec<f64> = (0..n).map(|i| 1.0 - ((i * 5 % 13) as f64) / 12.0).collect();
+        let lo = [-1.0, -1.0, 0.0];
+        let hi = [1.0, 1.0, 1.0];
+        (
+            BezierBox::new("a", lo, hi, deg, w1).unwrap(),
+            BezierBox::new("b", lo, hi, deg, w2).unwrap(),
+        )
+    }
+
+    /// Rows evaluated by two fields in turn, and more rows than the
+    /// per-thread row cache holds (so slots are reused by other rows): every
+    /// batch value has the bits of the field's own point evaluation, and a
+    /// clone (which shares the cache entries) agrees with the original.
+    #[test]
+    fn cached_rows_belong_to_their_field() {
+        let (a, b) = pair();
+        let a2 = a.clone();
+        let rows = 3 * CACHED_ROWS;
+        for pass in 0..2 {
+            for r in 0..rows {
+                let y = -1.0 + 2.0 * r as f32 / rows as f32;
+                let z = 0.25 + 0.5 * (r % 3) as f32;
+                let x: Vec<f32> = (0..40).map(|i| -1.1 + 0.055 * i as f32).collect();
+                let (ys, zs) = (vec![y; x.len()], vec![z; x.len()]);
+                for f in [&a, &b, &a2] {
+                    let mut out = vec![0f32; x.len()];
+                    f.eval_batch(&x, &ys, &zs, &mut out);
+                    for (i, &o) in out.iter().enumerate() {
+                        let want = f.eval([x[i] as f64, y as f64, z as f64]) as f32;
+                        assert_eq!(o.to_bits(), want.to_bits(), "pass {pass} row {r} lane {i}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Bounds over boxes flat in z, asked of two fields in turn at more z
+    /// than the per-thread cache of collapsed nets holds: each equals the
+    /// bound computed from the field's own net without the cache.
+    #[test]
+    fn cached_flat_nets_belong_to_their_field() {
+        let (a, b) = pair();
+        for pass in 0..2 {
+            for k in 0..12 {
+                let z = 0.05 + 0.08 * k as f64;
+                let bx = [
+                    Interval::new(-0.3, 0.1),
+                    Interval::new(0.2, 0.45),
+                    Interval::point(z),
+                ];
+                // The second round finds both nets cached.
+                for f in [&a, &b, &a, &b] {
+                    let got = f.interval(bx);
+                    let (u, _) = f.unit_box(bx);
+                    let (lo, hi) = net_range(&f.w, f.deg, u);
+                    assert_eq!(
+                        (got.lo, got.hi),
+                        (lo - f.tol, hi + f.tol),
+                        "pass {pass} z {z}"
+                    );
+                }
             }
         }
     }
