@@ -358,7 +358,10 @@ impl AtomicFile {
         }
         self.lent = false;
         let filled = lent.start + lent.len;
-        match (lent.buf, self.file.as_mut().expect("file is present until commit")) {
+        match (
+            lent.buf,
+            self.file.as_mut().expect("file is present until commit"),
+        ) {
             (LentBuf::Plain(v), Out::Buffered(w)) => {
                 let r = w.write_all(&v[..filled]);
                 self.plain = v;
@@ -367,7 +370,9 @@ impl AtomicFile {
             #[cfg(target_os = "linux")]
             (LentBuf::Stage(s), Out::Direct(d)) => d.put(s, filled),
             #[cfg(target_os = "linux")]
-            _ => Err(std::io::Error::other("put of a buffer lent in another mode")),
+            _ => Err(std::io::Error::other(
+                "put of a buffer lent in another mode",
+            )),
         }
     }
 
@@ -706,12 +711,13 @@ mod tests {
             k += 1;
         }
         assert_eq!(f.writes_direct(), expect_direct(&d));
-        assert!(f.put(Lent {
-            buf: LentBuf::Plain(Vec::new()),
-            start: 0,
-            len: 0
-        })
-        .is_err());
+        assert!(f
+            .put(Lent {
+                buf: LentBuf::Plain(Vec::new()),
+                start: 0,
+                len: 0
+            })
+            .is_err());
         f.commit().unwrap();
         assert!(fs::read(&t).unwrap() == want);
         // A file committed with a buffer still lent out fails and leaves
