@@ -9,7 +9,7 @@
 //! Work is split so bricks can do it on their own: [`accumulate`] sums each
 //! triangle's contribution into its corners' accumulators, the pipeline adds
 //! the accumulators of vertices shared with other bricks into their owner's,
-//! and [`apply`] moves a vertex once all its triangles have been seen. The
+//! and [`apply_all`] moves the vertices once all their triangles have been seen. The
 //! sums are in fixed point (integers in units of 2^-24 of the cell's area
 //! or volume), so they are exact and do not depend on the order in which a
 //! vertex's triangles arrive: the mesh is the same bytes whatever the brick
