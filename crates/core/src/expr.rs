@@ -357,14 +357,56 @@ impl Expr {
     /// This expression with the coordinates replaced by `p`: the inverse space
     /// mapping on which every transform and replication is built.
     pub fn remap(&self, p: &[Expr; 3]) -> Expr {
-        let mut memo = HashMap::new();
-        self.remap_memo(p, &mut memo)
+        self.rewrite(|cur, m| match cur.node() {
+            ExprNode::Var(a) => p[*a as usize].clone(),
+            _ => cur.with_children(m),
+        })
     }
 
-    fn remap_memo(&self, p: &[Expr; 3], memo: &mut HashMap<*const ExprNode, Expr>) -> Expr {
-        // Iterative post-order walk: generated models chain 100k nodes deep,
-        // more than a thread stack survives recursively.
+    /// This expression with every set and blend node written out as its
+    /// formula (identical values): what plain interval arithmetic sees of
+    /// a model, for comparisons and for consumers that cannot read set
+    /// nodes.
+    pub fn written_out(&self) -> Expr {
+        self.rewrite(|cur, m| match cur.node() {
+            ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)).expand(),
+            ExprNode::Blend { op, args } => Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
+                .expand()
+                .written_out(),
+            _ => cur.with_children(m),
+        })
+    }
+
+    /// This expression with every real power whose exponent is a whole
+    /// constant `n`, `|n| <= 16`, written as the integer power `powi(n)`:
+    /// the same function (also for negative, zero, infinite and NaN bases),
+    /// evaluated by a few multiplications instead of the exp/ln kernels, at
+    /// the price of a few roundings (about `|n|` ulps in f32, so batch
+    /// values may differ from the original's in their last bits). For
+    /// consumers that quantise values far more coarsely than that.
+    /// Subexpressions without such powers are shared with `self`.
+    pub fn with_integer_powers(&self) -> Expr {
+        let whole = |e: &Expr| {
+            e.as_const()
+                .filter(|c| c.fract() == 0.0 && c.abs() <= 16.0)
+                .map(|c| c as i32)
+        };
+        self.rewrite(|cur, m| match cur.node() {
+            ExprNode::Binary(BinaryOp::Pow, a, b) if whole(b).is_some() => {
+                m(a).powi(whole(b).unwrap_or(1))
+            }
+            _ if cur.children().iter().all(|&c| Arc::ptr_eq(&m(c).0, &c.0)) => cur.clone(),
+            _ => cur.with_children(m),
+        })
+    }
+
+    /// Rebuilds the graph bottom-up: `f` gets each distinct node (children
+    /// first) and the rebuilt form of any of its children, and returns the
+    /// node's rebuilt form. An iterative post-order walk: generated models
+    /// chain 100k nodes deep, more than a thread stack survives recursively.
+    fn rewrite(&self, mut f: impl FnMut(&Expr, &dyn Fn(&Expr) -> Expr) -> Expr) -> Expr {
         let key = |e: &Expr| Arc::as_ptr(&e.0);
+        let mut memo: HashMap<*const ExprNode, Expr> = HashMap::new();
         let mut stack: Vec<(&Expr, bool)> = vec![(self, false)];
         while let Some((cur, expanded)) = stack.pop() {
             if memo.contains_key(&key(cur)) {
@@ -379,134 +421,28 @@ impl Expr {
                 }
                 continue;
             }
-            let m = |c: &Expr| memo[&key(c)].clone();
-            let out = match cur.node() {
-                ExprNode::Var(a) => p[*a as usize].clone(),
-                ExprNode::Const(_) | ExprNode::Param { .. } => cur.clone(),
-                ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
-                ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
-                ExprNode::PowI(a, n) => m(a).powi(*n),
-                ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
-                ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)),
-                ExprNode::Blend { op, args } => {
-                    Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
-                }
-                ExprNode::Field { field, comp, args } => Expr::field_comp(
-                    field.clone(),
-                    *comp,
-                    [m(&args[0]), m(&args[1]), m(&args[2])],
-                ),
-            };
+            let out = f(cur, &|c: &Expr| memo[&key(c)].clone());
             memo.insert(key(cur), out);
         }
         memo[&key(self)].clone()
     }
 
-    /// This expression with every set and blend node written out as its
-    /// formula (identical values): what plain interval arithmetic sees of
-    /// a model, for comparisons and for consumers that cannot read set
-    /// nodes.
-    pub fn written_out(&self) -> Expr {
-        let key = |e: &Expr| Arc::as_ptr(&e.0);
-        let mut memo: HashMap<*const ExprNode, Expr> = HashMap::new();
-        let mut stack: Vec<(&Expr, bool)> = vec![(self, false)];
-        while let Some((cur, expanded)) = stack.pop() {
-            if memo.contains_key(&key(cur)) {
-                continue;
-            }
-            if !expanded {
-                stack.push((cur, true));
-                for c in cur.children() {
-                    if !memo.contains_key(&key(c)) {
-                        stack.push((c, false));
-                    }
-                }
-                continue;
-            }
-            let m = |c: &Expr| memo[&key(c)].clone();
-            let out = match cur.node() {
-                ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => cur.clone(),
-                ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
-                ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
-                ExprNode::PowI(a, n) => m(a).powi(*n),
-                ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
-                ExprNode::Set { op, a, b, alpha } => {
-                    Expr::set(*op, &m(a), &m(b), m(alpha)).expand()
-                }
-                ExprNode::Blend { op, args } => {
-                    Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
-                        .expand()
-                        .written_out()
-                }
-                ExprNode::Field { field, comp, args } => Expr::field_comp(
-                    field.clone(),
-                    *comp,
-                    [m(&args[0]), m(&args[1]), m(&args[2])],
-                ),
-            };
-            memo.insert(key(cur), out);
+    /// This node over the children `m(child)` (leaves unchanged).
+    fn with_children(&self, m: &dyn Fn(&Expr) -> Expr) -> Expr {
+        match self.node() {
+            ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => self.clone(),
+            ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
+            ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
+            ExprNode::PowI(a, n) => m(a).powi(*n),
+            ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
+            ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)),
+            ExprNode::Blend { op, args } => Expr::blend(*op, std::array::from_fn(|i| m(&args[i]))),
+            ExprNode::Field { field, comp, args } => Expr::field_comp(
+                field.clone(),
+                *comp,
+                [m(&args[0]), m(&args[1]), m(&args[2])],
+            ),
         }
-        memo[&key(self)].clone()
-    }
-
-    /// This expression with every real power whose exponent is a whole
-    /// constant `n`, `|n| <= 16`, written as the integer power `powi(n)`:
-    /// the same function (also for negative, zero, infinite and NaN bases),
-    /// evaluated by a few multiplications instead of the exp/ln kernels, at
-    /// the price of a few roundings (about `|n|` ulps in f32, so batch
-    /// values may differ from the original's in their last bits). For
-    /// consumers that quantise values far more coarsely than that.
-    /// Subexpressions without such powers are shared with `self`.
-    pub fn with_integer_powers(&self) -> Expr {
-        let key = |e: &Expr| Arc::as_ptr(&e.0);
-        let mut memo: HashMap<*const ExprNode, Expr> = HashMap::new();
-        let mut stack: Vec<(&Expr, bool)> = vec![(self, false)];
-        while let Some((cur, expanded)) = stack.pop() {
-            if memo.contains_key(&key(cur)) {
-                continue;
-            }
-            if !expanded {
-                stack.push((cur, true));
-                for c in cur.children() {
-                    if !memo.contains_key(&key(c)) {
-                        stack.push((c, false));
-                    }
-                }
-                continue;
-            }
-            let m = |c: &Expr| memo[&key(c)].clone();
-            let whole = |e: &Expr| {
-                e.as_const()
-                    .filter(|c| c.fract() == 0.0 && c.abs() <= 16.0)
-                    .map(|c| c as i32)
-            };
-            let unchanged = cur
-                .children()
-                .iter()
-                .all(|&c| Arc::ptr_eq(&memo[&key(c)].0, &c.0));
-            let out = match cur.node() {
-                ExprNode::Binary(BinaryOp::Pow, a, b) if whole(b).is_some() => {
-                    m(a).powi(whole(b).unwrap_or(1))
-                }
-                _ if unchanged => cur.clone(),
-                ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. } => cur.clone(),
-                ExprNode::Unary(op, a) => Expr::unary(*op, m(a)),
-                ExprNode::Binary(op, a, b) => Expr::binary(*op, m(a), m(b)),
-                ExprNode::PowI(a, n) => m(a).powi(*n),
-                ExprNode::Select(c, a, b) => Expr::select(m(c), m(a), m(b)),
-                ExprNode::Set { op, a, b, alpha } => Expr::set(*op, &m(a), &m(b), m(alpha)),
-                ExprNode::Blend { op, args } => {
-                    Expr::blend(*op, std::array::from_fn(|i| m(&args[i])))
-                }
-                ExprNode::Field { field, comp, args } => Expr::field_comp(
-                    field.clone(),
-                    *comp,
-                    [m(&args[0]), m(&args[1]), m(&args[2])],
-                ),
-            };
-            memo.insert(key(cur), out);
-        }
-        memo[&key(self)].clone()
     }
 
     /// Number of distinct tree nodes (by pointer), a size measure for tests and reports.
