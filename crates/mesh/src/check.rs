@@ -468,16 +468,26 @@ fn add(row: &mut Row, tag: u32, key: u16, one: u8) -> Option<(u64, i64)> {
     };
     row.keys[i] = key;
     let u = if found { row.uses[i] } else { 0 };
-    // Counts stick at 15 (never good again).
+    let v = bump(u, one);
+    row.uses[i] = v;
+    row.len = (n + !found as usize) as u8;
+    Some((!found as u64, (v == GOOD) as i64 - (u == GOOD) as i64))
+}
+
+/// Counts `u` with one more use `one` (`UP` or `DOWN`); each count sticks
+/// at 15 (never good again).
+#[inline(always)]
+fn bump(u: u8, one: u8) -> u8 {
     let stuck = if one == UP {
         u >= 0xf0
     } else {
         u & 0x0f == 0x0f
     };
-    let v = if stuck { u } else { u + one };
-    row.uses[i] = v;
-    row.len = (n + !found as usize) as u8;
-    Some((!found as u64, (v == GOOD) as i64 - (u == GOOD) as i64))
+    if stuck {
+        u
+    } else {
+        u + one
+    }
 }
 
 /// [`add`] for two uses of one row, to two different keys: both or (the
@@ -519,12 +529,7 @@ fn add2(row: &mut Row, tag: u32, uses: [(u16, u8); 2]) -> Option<(u64, i64)> {
     for (i, found, (key, one)) in [(i0, h0 != 0, uses[0]), (i1, h1 != 0, uses[1])] {
         row.keys[i] = key;
         let u = if found { row.uses[i] } else { 0 };
-        let stuck = if one == UP {
-            u >= 0xf0
-        } else {
-            u & 0x0f == 0x0f
-        };
-        let v = if stuck { u } else { u + one };
+        let v = bump(u, one);
         row.uses[i] = v;
         g += (v == GOOD) as i64 - (u == GOOD) as i64;
     }
