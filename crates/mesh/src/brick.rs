@@ -2,6 +2,7 @@
 //! triangles per cell sign pattern, refinement of the vertices it owns.
 
 use crate::classify::{proven_sign, unproven_cells, BrickClass};
+use crate::correct::{accumulate, apply_all, Acc};
 use crate::grid::Grid;
 use crate::refine::{refine_edges, Edge};
 use crate::tets::CellTable;
@@ -12,11 +13,26 @@ use microfrep_core::{BatchEval, Interval, IntervalEval, Simplify, Tape, BLOCK};
 /// referenced by key and resolved against their owner when stitching.
 #[derive(Default)]
 pub struct BrickMesh {
+    /// Final positions of the owned vertices, except those in `owned_keys`
+    /// (other bricks' triangles may still add to their correction): those
+    /// are as refined, neither corrected nor clamped yet.
     pub owned_pos: Vec<[f32; 3]>,
     /// (global edge key, index into `owned_pos`) of the owned vertices on
     /// the brick's lower faces (the only ones other bricks use), by key.
     pub owned_keys: Vec<(u64, u32)>,
+    /// Correction sums of the vertices of `owned_keys` (same order) from
+    /// this brick's triangles.
+    pub shared_acc: Vec<Acc>,
     pub foreign_keys: Vec<u64>,
+    /// Correction sums of the foreign vertices (order of `foreign_keys`)
+    /// from this brick's triangles, for their owners.
+    pub foreign_acc: Vec<Acc>,
+    /// The brick's own copy of its foreign vertices and whether it sampled
+    /// on a shortened tape (for the test that both copies agree).
+    #[cfg(test)]
+    pub foreign_pos: Vec<[f32; 3]>,
+    #[cfg(test)]
+    pub shortened: bool,
     /// Indices below `owned_pos.len()` are owned vertices, the rest
     /// `foreign_keys[i - owned]`.
     pub tris: Vec<[u32; 3]>,
@@ -43,16 +59,44 @@ pub struct Scratch {
     /// each local vertex.
     verts: Vec<u32>,
     remap: Vec<u32>,
+    /// Edges to refine on the brick's own (possibly shortened) tape and on
+    /// the full tape, each with the local vertex it makes.
     edges: Vec<Edge>,
+    edge_of: Vec<u32>,
+    full_edges: Vec<Edge>,
+    full_edge_of: Vec<u32>,
+    refined: Vec<[f32; 3]>,
+    /// Positions of all local vertices (owned, then foreign), and their
+    /// correction sums.
+    pos: Vec<[f32; 3]>,
+    acc: Vec<Acc>,
     tris: Vec<[u32; 3]>,
+    finish: Finish,
+}
+
+/// How a brick's vertices are finished: the grid's cell size, the volume
+/// correction on or off, and the box they are clamped into.
+#[derive(Clone, Copy)]
+pub struct Finish {
+    pub h: f64,
+    pub correct: bool,
+    pub lo: [f32; 3],
+    pub hi: [f32; 3],
 }
 
 impl Scratch {
-    pub fn new(tape: &Tape, brick: usize, simplify: bool) -> Self {
+    pub fn new(tape: &Tape, brick: usize, simplify: bool, finish: Finish) -> Self {
         let nodes = (brick + 1).pow(3);
         Scratch {
             tape: tape.clone(),
             simplify,
+            finish,
+            edge_of: Vec::new(),
+            full_edges: Vec::new(),
+            full_edge_of: Vec::new(),
+            refined: Vec::new(),
+            pos: Vec::new(),
+            acc: Vec::new(),
             batch: BatchEval::new(tape),
             interval: IntervalEval::new(tape),
             edges: Vec::new(),
@@ -175,43 +219,77 @@ pub fn mesh_brick(
     s.remap.clear();
     s.remap.resize(s.verts.len(), u32::MAX);
     s.edges.clear();
+    s.edge_of.clear();
+    s.full_edges.clear();
+    s.full_edge_of.clear();
     let mut owned = 0u32;
+    let mut foreign = 0u32;
     for (vi, &packed) in s.verts.iter().enumerate() {
         let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
         let dir = (packed >> 27) as usize;
         let l = ln[0] + ln[1] * sy + ln[2] * sz;
         let g: [usize; 3] = std::array::from_fn(|a| lo[a] + ln[a]);
         let gkey = grid.node_index(g) * 8 + dir as u64;
-        if (0..3).all(|a| ln[a] + 1 < n[a] || last[a]) {
+        let e = l + (dir & 1) * sx + ((dir >> 1) & 1) * sy + ((dir >> 2) & 1) * sz;
+        let end: [usize; 3] = std::array::from_fn(|a| g[a] + (dir >> a & 1));
+        let (pa, pb) = (grid.node_pos(g), grid.node_pos(end));
+        let edge = if s.inside[l] == 1 {
+            Edge::new(pa, pb, s.vals[l], s.vals[e])
+        } else {
+            Edge::new(pb, pa, s.vals[e], s.vals[l])
+        };
+        // Edges in a face plane are shared with a neighbour, which refines
+        // them too (its foreign vertices): both do it on the full tape, so
+        // both get the same bits.
+        let in_face = (0..3).any(|a| (ln[a] == 0 || ln[a] + 1 == n[a]) && dir >> a & 1 == 0);
+        let at = if (0..3).all(|a| ln[a] + 1 < n[a] || last[a]) {
             s.remap[vi] = owned;
             // Only vertices on the lower faces can be wanted by other bricks.
             if ln.contains(&0) {
                 out.owned_keys.push((gkey, owned));
             }
             owned += 1;
-            let e = l + (dir & 1) * sx + ((dir >> 1) & 1) * sy + ((dir >> 2) & 1) * sz;
-            let end: [usize; 3] = std::array::from_fn(|a| g[a] + (dir >> a & 1));
-            let (pa, pb) = (grid.node_pos(g), grid.node_pos(end));
-            s.edges.push(if s.inside[l] == 1 {
-                Edge::new(pa, pb, s.vals[l], s.vals[e])
-            } else {
-                Edge::new(pb, pa, s.vals[e], s.vals[l])
-            });
+            owned - 1
         } else {
             out.foreign_keys.push(gkey);
+            s.remap[vi] = u32::MAX - 1 - foreign;
+            foreign += 1;
+            u32::MAX - foreign
+        };
+        if in_face || local.is_none() {
+            s.full_edges.push(edge);
+            s.full_edge_of.push(at);
+        } else {
+            s.edges.push(edge);
+            s.edge_of.push(at);
         }
     }
+    // Foreign vertices follow the owned ones, in the order of `foreign_keys`.
+    let to_local = |at: u32| {
+        if at >= u32::MAX - foreign {
+            owned + (u32::MAX - 1 - at)
+        } else {
+            at
+        }
+    };
+    for r in s.remap.iter_mut() {
+        *r = to_local(*r);
+    }
+    s.pos.clear();
+    s.pos.resize((owned + foreign) as usize, [0.0; 3]);
     // The shortened tape keeps the zero set, so the roots are the same
     // (found in fewer operations).
-    refine_edges(
-        local.as_mut().unwrap_or(&mut s.batch),
-        &s.edges,
-        &mut out.owned_pos,
-    );
-    // Foreign vertices follow the owned ones, in the order of `foreign_keys`.
-    let unset = s.remap.iter_mut().filter(|r| **r == u32::MAX);
-    for (next, r) in (owned..).zip(unset) {
-        *r = next;
+    if let Some(ev) = local.as_mut() {
+        s.refined.clear();
+        refine_edges(ev, &s.edges, &mut s.refined);
+        for (&at, &p) in s.edge_of.iter().zip(&s.refined) {
+            s.pos[to_local(at) as usize] = p;
+        }
+    }
+    s.refined.clear();
+    refine_edges(&mut s.batch, &s.full_edges, &mut s.refined);
+    for (&at, &p) in s.full_edge_of.iter().zip(&s.refined) {
+        s.pos[to_local(at) as usize] = p;
     }
     out.owned_keys.sort_unstable();
     out.tris = s
@@ -219,6 +297,37 @@ pub fn mesh_brick(
         .iter()
         .map(|t| t.map(|v| s.remap[v as usize]))
         .collect();
+    // The volume correction of this brick's triangles, while they are in
+    // cache: every vertex they use is known here (foreign ones refined
+    // alike by their owner). Vertices no other brick touches are final.
+    let f = s.finish;
+    s.acc.clear();
+    s.acc.resize(s.pos.len(), [0; 5]);
+    if f.correct {
+        accumulate(&mut s.batch, &s.pos, &out.tris, f.h, &mut s.acc);
+    }
+    let owned = owned as usize;
+    out.shared_acc = out
+        .owned_keys
+        .iter()
+        .map(|&(_, v)| s.acc[v as usize])
+        .collect();
+    out.foreign_acc = s.acc[owned..].to_vec();
+    #[cfg(test)]
+    {
+        out.foreign_pos = s.pos[owned..].to_vec();
+        out.shortened = local.is_some();
+    }
+    out.owned_pos = s.pos[..owned].to_vec();
+    let unmoved: Vec<[f32; 3]> = out
+        .owned_keys
+        .iter()
+        .map(|&(_, v)| out.owned_pos[v as usize])
+        .collect();
+    apply_all(&mut out.owned_pos, &s.acc[..owned], &[], f.h, f.lo, f.hi);
+    for (&(_, v), &p) in out.owned_keys.iter().zip(&unmoved) {
+        out.owned_pos[v as usize] = p;
+    }
     out
 }
 
@@ -340,5 +449,62 @@ fn fix_signs(grid: &Grid, classes: &[BrickClass], lo: [usize; 3], n: [usize; 3],
                 fix(n[0] - 1, j, k);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{MeshOptions, Plan};
+
+    /// A brick computes the positions of its foreign vertices itself (for
+    /// the volume correction of its triangles); they must be the owner's
+    /// bits, also where either brick sampled on a shortened tape.
+    #[test]
+    fn foreign_vertices_are_the_owners_bits_with_shortened_tapes() {
+        let e = microfrep_structures::examples::shell_lattice();
+        let mut o = MeshOptions::new([[-1.1; 3], [1.1; 3]], 56);
+        o.brick = 8;
+        let plan = Plan::new(&microfrep_core::Shape::from(&e), &o).unwrap();
+        let finish = Finish {
+            h: plan.grid.h,
+            correct: true,
+            lo: [-1.1; 3],
+            hi: [1.1; 3],
+        };
+        let mut s = Scratch::new(&plan.tape, plan.grid.brick, true, finish);
+        let meshes: Vec<BrickMesh> = (0..plan.grid.brick_count())
+            .map(|k| {
+                if plan.classes[k] != BrickClass::Surface {
+                    return BrickMesh::default();
+                }
+                let b = plan.grid.brick_coords(k);
+                mesh_brick(&plan.grid, &plan.classes, plan.table, b, &mut s)
+            })
+            .collect();
+        let shortened = meshes.iter().filter(|m| m.shortened).count();
+        assert!(
+            shortened >= 10,
+            "only {shortened} bricks shortened their tape"
+        );
+        let mut compared = 0;
+        for m in &meshes {
+            for (&key, &p) in m.foreign_keys.iter().zip(&m.foreign_pos) {
+                let g = &plan.grid;
+                let owner = g.brick_index(g.owner_brick(g.node_from_index(key / 8)));
+                let om = &meshes[owner];
+                let i = om
+                    .owned_keys
+                    .binary_search_by_key(&key, |&(k, _)| k)
+                    .expect("the owner makes the vertex");
+                let q = om.owned_pos[om.owned_keys[i].1 as usize];
+                assert_eq!(p.map(f32::to_bits), q.map(f32::to_bits), "edge {key}");
+                compared += (m.shortened || om.shortened) as usize;
+            }
+        }
+        assert!(
+            compared > 1000,
+            "{compared} vertices compared near shortened bricks"
+        );
     }
 }

@@ -6,10 +6,12 @@
 //! the area-weighted mean of 3/4 `d` over its triangles removes that gap to
 //! second order. The combinatorics (hence the guarantees) do not change.
 //!
-//! Work is split so bricks can do it on their own: [`accumulate`] sums each
-//! triangle's contribution into its corners' accumulators, the pipeline adds
-//! the accumulators of vertices shared with other bricks into their owner's,
-//! and [`apply_all`] moves the vertices once all their triangles have been seen. The
+//! Work is split so bricks can do it on their own: a brick's
+//! [`accumulate`] sums each of its triangles' contribution into its
+//! corners' accumulators, the pipeline adds the accumulators of vertices
+//! shared with other bricks into their owner's, and [`apply_all`] moves
+//! the vertices once all their triangles have been seen (in the brick
+//! itself for vertices no other brick touches). The
 //! sums are in fixed point (integers in units of 2^-24 of the cell's area
 //! or volume), so they are exact and do not depend on the order in which a
 //! vertex's triangles arrive: the mesh is the same bytes whatever the brick
@@ -142,7 +144,8 @@ pub fn add(a: &mut Acc, b: &Acc) {
 }
 
 /// Moves every vertex of `pos` along its mean normal by 3/4 of its mean
-/// gap, from its sums `own + inbound` (one entry each per vertex) on a grid
+/// gap, from its sums `own + inbound` (one entry each per vertex; an empty
+/// `inbound` adds nothing) on a grid
 /// of cell size `h`, with no part of a move taking a vertex further
 /// outside the box `lo..hi` than it is: along an axis where the move would
 /// leave the box it stops at the face (a vertex on a face slides within
@@ -164,8 +167,15 @@ pub fn apply_all(
     let scale = (0.75 * h) as f32;
     let mut col = [[0.0f32; N]; 5];
     let mut d = [[0.0f32; N]; 3];
-    for ((p, a), b) in pos.chunks_mut(N).zip(own.chunks(N)).zip(inbound.chunks(N)) {
+    let zeros = [[0; 5]; N];
+    for (c, p) in pos.chunks_mut(N).enumerate() {
         let n = p.len();
+        let a = &own[c * N..][..n];
+        let b = if inbound.is_empty() {
+            &zeros[..n]
+        } else {
+            &inbound[c * N..][..n]
+        };
         for i in 0..n {
             for k in 0..5 {
                 col[k][i] = a[i][k].saturating_add(b[i][k]) as f32;

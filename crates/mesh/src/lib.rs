@@ -272,7 +272,7 @@ impl Plan {
     pub fn run(&self, progress: &(dyn Fn(usize) + Sync)) -> Result<Mesh, MeshError> {
         let mut c = sink::Collect::default();
         self.run_into(&mut c, progress)?;
-        Ok(c.mesh)
+        Ok(c.into_mesh())
     }
 
     /// Meshes all surface bricks into `sink`, a few z-slabs of bricks at a

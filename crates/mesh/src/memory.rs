@@ -103,7 +103,9 @@ pub fn estimate_grid(tape: &Tape, g: &Grid, method: CellMethod) -> Estimate {
 
 /// Bytes per triangle and per vertex held by the pipeline while it works:
 /// the brick's triangles and their global copy (12 + 12); per vertex its
-/// position, key, two correction sums and final copy (12 + 12 + 40 + 12).
+/// position, key, two correction sums and final copy (12 + 12 + 40 + 12;
+/// the sums are now kept only for vertices on brick faces, so this is an
+/// upper bound).
 const WINDOW_BYTES_PER_TRI: f64 = 24.0;
 const WINDOW_BYTES_PER_VERT: f64 = 76.0;
 

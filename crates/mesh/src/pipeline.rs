@@ -5,35 +5,35 @@
 //! A brick's triangles use vertices it owns and vertices owned by bricks
 //! above it in x, y or z (see [`crate::brick`]), so group `g`'s triangles
 //! use groups `g` and `g + 1` only, and a vertex of group `g` is used by
-//! triangles of groups `g - 1` and `g` only. Hence, once group `g + 1` is
-//! meshed: group `g`'s triangles get global indices and add their share of
-//! the volume correction to their corners (stage A); the shares of
-//! vertices owned by other bricks are added to their owners in brick order
-//! (B); group `g`'s vertices have seen all their triangles and take their
-//! final positions (C); and group `g - 1`'s triangles have all their
+//! triangles of groups `g - 1` and `g` only. Each brick refines its foreign
+//! vertices too (the same bits as their owner), so it sums the volume
+//! correction of all its triangles and finishes every vertex no other brick
+//! touches while meshing. Once group `g + 1` is meshed: group `g`'s
+//! triangles get global indices (stage A); the correction sums of vertices
+//! owned by other bricks are added to their owners in brick order (B);
+//! group `g`'s shared vertices have seen all their triangles and take
+//! their final positions (C); and group `g - 1`'s triangles have all their
 //! vertices final (D). The output is the same as if the whole mesh had been
 //! made at once, whatever the group size, and the same on every run.
 
-use crate::brick::{mesh_brick, BrickMesh, Scratch};
+use crate::brick::{mesh_brick, BrickMesh, Finish, Scratch};
 use crate::classify::BrickClass;
-use crate::correct::{accumulate, add, apply_all, Acc};
+use crate::correct::{add, apply_all, Acc};
 use crate::sink::{MeshSink, VertexWindow};
 use crate::{MeshError, Plan};
-use microfrep_core::BatchEval;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A group's work after stage A, per brick.
 #[derive(Default)]
 struct Work {
-    /// Correction sums of the brick's owned vertices from its own triangles
-    /// (stage A) and from other bricks' triangles, added in brick order (B);
-    /// kept apart so the sums do not depend on how bricks are grouped.
-    acc: Vec<Acc>,
+    /// Correction sums of the brick's shared vertices (those of its
+    /// `owned_keys`, same order) from other bricks' triangles, added in
+    /// brick order (B); kept apart from the brick's own sums so the sums do
+    /// not depend on how bricks are grouped.
     inbound: Vec<Acc>,
-    /// Foreign vertices as (owner brick, index among its owned vertices).
+    /// Foreign vertices as (owner brick, index among its shared vertices).
     foreign: Vec<(u32, u32)>,
-    foreign_acc: Vec<Acc>,
     /// The brick's triangles, in global vertex indices after stage A.
     tris: Vec<[u32; 3]>,
 }
@@ -57,9 +57,9 @@ impl Group {
     }
 }
 
-/// A foreign vertex found in its owner: (owner brick, its local index,
-/// global index, position before correction).
-type Found = (u32, u32, u32, [f32; 3]);
+/// A foreign vertex found in its owner: (owner brick, its index among the
+/// owner's shared vertices, global index).
+type Found = (u32, u32, u32);
 
 /// The read-only part of a group that stage A looks vertices up in.
 #[derive(Clone, Copy)]
@@ -102,12 +102,7 @@ fn find(plan: &Plan, groups: [Option<Owners>; 2], key: u64) -> Result<Found, Mes
     match m.owned_keys.binary_search_by_key(&key, |&(k, _)| k) {
         Ok(i) => {
             let local = m.owned_keys[i].1;
-            Ok((
-                owner as u32,
-                local,
-                g.offsets[j] + local,
-                m.owned_pos[local as usize],
-            ))
+            Ok((owner as u32, i as u32, g.offsets[j] + local))
         }
         Err(_) => Err(MeshError::Internal(format!(
             "grid edge {key} is used by a brick but not made by its owner brick {owner}"
@@ -131,10 +126,17 @@ impl Plan {
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Group, MeshError> {
         let first = range.start;
+        let clamp = BoxClamp::new(self.bounds);
+        let finish = Finish {
+            h: self.grid.h,
+            correct: self.correct,
+            lo: clamp.lo,
+            hi: clamp.hi,
+        };
         let mut meshes: Vec<BrickMesh> = range
             .into_par_iter()
             .map_init(
-                || Scratch::new(&self.tape, self.grid.brick, self.simplify),
+                || Scratch::new(&self.tape, self.grid.brick, self.simplify, finish),
                 |s, k| {
                     if self.classes[k] != BrickClass::Surface {
                         return BrickMesh::default();
@@ -163,7 +165,7 @@ impl Plan {
         let work = meshes
             .iter_mut()
             .map(|m| Work {
-                inbound: vec![[0; 5]; m.owned_pos.len()],
+                inbound: vec![[0; 5]; m.owned_keys.len()],
                 // Still in the brick's local numbering until stage A.
                 tris: std::mem::take(&mut m.tris),
                 ..Work::default()
@@ -179,10 +181,9 @@ impl Plan {
         })
     }
 
-    /// Stage A for `g`: global triangles and correction sums; `next` is the
-    /// following group, if any.
+    /// Stage A for `g`: global triangles; `next` is the following group,
+    /// if any.
     fn stage_a(&self, g: &mut Group, next: Option<&Group>) -> Result<(), MeshError> {
-        let h = self.grid.h;
         let Group {
             meshes,
             offsets,
@@ -198,39 +199,20 @@ impl Plan {
         let (meshes, offsets) = (here.meshes, here.offsets);
         let lookup = |key: u64| find(self, [Some(here), next.map(owners)], key);
         work.par_iter_mut().enumerate().try_for_each_init(
-            || {
-                (
-                    BatchEval::new(&self.tape),
-                    Vec::new(),
-                    Vec::new(),
-                    Vec::new(),
-                )
-            },
-            |(ev, pos, globals, acc): &mut (BatchEval, Vec<[f32; 3]>, Vec<u32>, Vec<Acc>),
-             (j, w)|
-             -> Result<(), MeshError> {
+            Vec::new,
+            |globals: &mut Vec<u32>, (j, w)| -> Result<(), MeshError> {
                 let m = &meshes[j];
                 if w.tris.is_empty() {
                     return Ok(());
                 }
                 let owned = m.owned_pos.len();
-                pos.clear();
-                pos.extend_from_slice(&m.owned_pos);
                 globals.clear();
                 w.foreign.clear();
                 for &key in &m.foreign_keys {
-                    let (ob, ol, gi, p) = lookup(key)?;
-                    w.foreign.push((ob, ol));
+                    let (ob, oi, gi) = lookup(key)?;
+                    w.foreign.push((ob, oi));
                     globals.push(gi);
-                    pos.push(p);
                 }
-                acc.clear();
-                acc.resize(pos.len(), [0; 5]);
-                if self.correct {
-                    accumulate(ev, pos, &w.tris, h, acc);
-                }
-                w.acc = acc[..owned].to_vec();
-                w.foreign_acc = acc[owned..].to_vec();
                 let off = offsets[j];
                 // To global indices, in place (a fresh vector cost a page
                 // fault per 340 triangles).
@@ -254,8 +236,8 @@ impl Plan {
 fn stage_b(g: &mut Group, mut next: Option<&mut Group>) {
     for j in 0..g.work.len() {
         let foreign = std::mem::take(&mut g.work[j].foreign);
-        let sums = std::mem::take(&mut g.work[j].foreign_acc);
-        for (&(ob, ol), s) in foreign.iter().zip(&sums) {
+        let sums = std::mem::take(&mut g.meshes[j].foreign_acc);
+        for (&(ob, oi), s) in foreign.iter().zip(&sums) {
             let ob = ob as usize;
             let target = if g.holds(ob) {
                 &mut g.work[ob - g.first]
@@ -263,19 +245,28 @@ fn stage_b(g: &mut Group, mut next: Option<&mut Group>) {
                 let n = next.as_deref_mut().expect("stage A found the owner");
                 &mut n.work[ob - n.first]
             };
-            add(&mut target.inbound[ol as usize], s);
+            add(&mut target.inbound[oi as usize], s);
         }
     }
 }
 
-/// Stage C: final positions of `g`'s vertices (corrected, then kept inside
-/// the box); frees what later stages do not need.
+/// Stage C: final positions of `g`'s shared vertices (corrected, then kept
+/// inside the box; the others were finished by their brick); frees what
+/// later stages do not need.
 fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp) {
     g.meshes
         .par_iter_mut()
         .zip(g.work.par_iter())
         .for_each(|(m, w)| {
-            apply_all(&mut m.owned_pos, &w.acc, &w.inbound, h, clamp.lo, clamp.hi);
+            let mut p: Vec<[f32; 3]> = m
+                .owned_keys
+                .iter()
+                .map(|&(_, v)| m.owned_pos[v as usize])
+                .collect();
+            apply_all(&mut p, &m.shared_acc, &w.inbound, h, clamp.lo, clamp.hi);
+            for (&(_, v), q) in m.owned_keys.iter().zip(p) {
+                m.owned_pos[v as usize] = q;
+            }
         });
     let n: usize = g.meshes.iter().map(|m| m.owned_pos.len()).sum();
     let mut verts = Vec::with_capacity(n);
@@ -285,14 +276,13 @@ fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp) {
     g.verts = verts;
     g.meshes = Vec::new();
     for w in &mut g.work {
-        w.acc = Vec::new();
         w.inbound = Vec::new();
     }
 }
 
 fn emit_triangles(
     sink: &mut (dyn MeshSink + Send),
-    g: &Group,
+    g: Group,
     next: Option<&Group>,
 ) -> Result<(), MeshError> {
     let empty: &[[f32; 3]] = &[];
@@ -302,8 +292,8 @@ fn emit_triangles(
             next.map_or((u32::MAX, empty), |n| (n.base, &n.verts[..])),
         ],
     };
-    for w in &g.work {
-        sink.triangles(&w.tris, &window)?;
+    for w in g.work {
+        sink.take_triangles(w.tris, &window)?;
     }
     Ok(())
 }
@@ -349,7 +339,7 @@ pub fn run(
                 stage_b(&mut g, next.as_mut());
                 stage_c(&mut g, plan.grid.h, &clamp);
                 sink.vertices(&g.verts)?;
-                match &prev {
+                match prev.take() {
                     Some(p) => emit_triangles(sink, p, Some(&g)),
                     None => Ok(()),
                 }
@@ -362,7 +352,7 @@ pub fn run(
         next = after?;
     }
     if let Some(p) = prev {
-        emit_triangles(sink, &p, None)?;
+        emit_triangles(sink, p, None)?;
     }
     Ok(())
 }

@@ -34,23 +34,75 @@ pub trait MeshSink {
     /// Takes the next triangles, with global vertex indices, counter-clockwise
     /// seen from outside; `window` holds the position of every vertex they use.
     fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError>;
+    /// [`Self::triangles`] with the buffer handed over, for sinks that keep
+    /// triangles whole (no copy); by default it lends them to `triangles`.
+    fn take_triangles(&mut self, t: Vec<[u32; 3]>, window: &VertexWindow) -> Result<(), MeshError> {
+        self.triangles(&t, window)
+    }
 }
 
-/// Collects the whole mesh in memory.
+/// Collects the whole mesh in memory: the parts as they arrive (the
+/// triangles without a copy), joined once at the end by
+/// [`Collect::into_mesh`] into buffers of the exact size, several threads
+/// copying. (Growing one buffer copied it again at every doubling, on the
+/// pipeline's one sink thread.)
 #[derive(Default)]
 pub struct Collect {
-    /// The vertices and triangles received so far.
-    pub mesh: Mesh,
+    vertices: Vec<Vec<[f32; 3]>>,
+    triangles: Vec<Vec<[u32; 3]>>,
+}
+
+impl Collect {
+    /// The mesh received so far, in order.
+    pub fn into_mesh(self) -> Mesh {
+        Mesh {
+            vertices: concat(self.vertices),
+            triangles: concat(self.triangles),
+        }
+    }
+}
+
+/// The parts one after the other, copied in parallel into a buffer of the
+/// exact size (zeroed by the allocator's fresh pages, not by a pass).
+fn concat<T: Copy + Default + Send + Sync>(mut parts: Vec<Vec<T>>) -> Vec<T> {
+    use rayon::prelude::*;
+    if parts.len() <= 1 {
+        return parts.pop().unwrap_or_default();
+    }
+    let total = parts.iter().map(Vec::len).sum();
+    let mut out = vec![T::default(); total];
+    let mut rest = &mut out[..];
+    let mut dst = Vec::with_capacity(parts.len());
+    for p in &parts {
+        let (a, b) = rest.split_at_mut(p.len());
+        dst.push(a);
+        rest = b;
+    }
+    dst.into_par_iter()
+        .zip(parts.par_iter())
+        .for_each(|(d, s)| d.copy_from_slice(s));
+    out
 }
 
 impl MeshSink for Collect {
     fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
-        self.mesh.vertices.extend_from_slice(v);
+        if !v.is_empty() {
+            self.vertices.push(v.to_vec());
+        }
         Ok(())
     }
 
     fn triangles(&mut self, t: &[[u32; 3]], _: &VertexWindow) -> Result<(), MeshError> {
-        self.mesh.triangles.extend_from_slice(t);
+        if !t.is_empty() {
+            self.triangles.push(t.to_vec());
+        }
+        Ok(())
+    }
+
+    fn take_triangles(&mut self, t: Vec<[u32; 3]>, _: &VertexWindow) -> Result<(), MeshError> {
+        if !t.is_empty() {
+            self.triangles.push(t);
+        }
         Ok(())
     }
 }
