@@ -4,7 +4,7 @@
 use crate::classify::{proven_sign, unproven_cells, BrickClass};
 use crate::correct::{accumulate, apply_all, Acc};
 use crate::grid::Grid;
-use crate::refine::{refine_edges, Edge};
+use crate::refine::{common_t_min, refine_edges, Edge};
 use crate::tets::CellTable;
 use microfrep_core::{BatchEval, Interval, IntervalEval, Simplify, Tape, BLOCK};
 
@@ -224,6 +224,18 @@ pub fn mesh_brick(
     s.full_edge_of.clear();
     let mut owned = 0u32;
     let mut foreign = 0u32;
+    // Edges are at least a cell long, and their ends lie within the
+    // brick's nodes.
+    let t_min = {
+        let (a, b) = (
+            grid.node_pos(lo),
+            grid.node_pos(std::array::from_fn(|k| lo[k] + n[k] - 1)),
+        );
+        let far = (0..3)
+            .map(|k| a[k].abs().max(b[k].abs()))
+            .fold(0.0, f64::max);
+        common_t_min(far, grid.h)
+    };
     for (vi, &packed) in s.verts.iter().enumerate() {
         let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
         let dir = (packed >> 27) as usize;
@@ -233,10 +245,14 @@ pub fn mesh_brick(
         let e = l + (dir & 1) * sx + ((dir >> 1) & 1) * sy + ((dir >> 2) & 1) * sz;
         let end: [usize; 3] = std::array::from_fn(|a| g[a] + (dir >> a & 1));
         let (pa, pb) = (grid.node_pos(g), grid.node_pos(end));
-        let edge = if s.inside[l] == 1 {
-            Edge::new(pa, pb, s.vals[l], s.vals[e])
+        let (p0, p1, g0, g1) = if s.inside[l] == 1 {
+            (pa, pb, s.vals[l], s.vals[e])
         } else {
-            Edge::new(pb, pa, s.vals[e], s.vals[l])
+            (pb, pa, s.vals[e], s.vals[l])
+        };
+        let edge = match t_min {
+            Some(t) => Edge::with_t_min(p0, p1, g0, g1, t),
+            None => Edge::new(p0, p1, g0, g1),
         };
         // Edges in a face plane are shared with a neighbour, which refines
         // them too (its foreign vertices): both do it on the full tape, so

@@ -27,7 +27,29 @@ pub struct Edge {
     t_min: f32,
 }
 
+/// The `t_min` that [`Edge::new`] gives every edge at least `h` long whose
+/// ends lie within `far` of the origin on every axis, where that is the
+/// same for all of them (the f32 steps there are small against the edge):
+/// bricks then skip the per-edge length and precision work.
+pub fn common_t_min(far: f64, h: f64) -> Option<f32> {
+    // A little shorter than `h`, for edges whose rounded length is.
+    let ulps = MIN_ULPS * microfrep_io::precision::f32_step(far) / (0.999 * h);
+    ((ulps as f32) <= T_MIN).then_some(T_MIN)
+}
+
 impl Edge {
+    /// [`Edge::new`] for an edge whose `t_min` is known to be `t_min`
+    /// (from [`common_t_min`]).
+    pub fn with_t_min(p0: [f64; 3], p1: [f64; 3], g0: f32, g1: f32, t_min: f32) -> Edge {
+        Edge {
+            p0: p0.map(|v| v as f32),
+            d: std::array::from_fn(|k| (p1[k] - p0[k]) as f32),
+            g0,
+            g1,
+            t_min,
+        }
+    }
+
     pub fn new(p0: [f64; 3], p1: [f64; 3], g0: f32, g1: f32) -> Edge {
         let d: [f64; 3] = std::array::from_fn(|k| p1[k] - p0[k]);
         let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -162,6 +184,38 @@ mod tests {
         assert!((p[0] as f64 - 0.3f64.sqrt()).abs() < 3e-7, "{p:?}");
         let p = refine(&(0.1234 - &x), [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]);
         assert!((p[0] as f64 - 0.1234).abs() < 1e-6, "{p:?}");
+    }
+
+    #[test]
+    fn the_common_t_min_is_what_every_edge_would_get() {
+        // Where a common value is offered, each edge's own computation
+        // agrees, axis and diagonal edges alike; where it is declined,
+        // edges that far out do need their own.
+        for (h, far, offer) in [
+            (0.01, 1.0, true),
+            (2.0 / 128.0, 1.1, true),
+            (0.1, 100.0, true),
+            (0.01, 1000.0, false),
+            (1e-4, 10.0, false),
+        ] {
+            let Some(t) = common_t_min(far, h) else {
+                assert!(!offer, "{h} {far}");
+                let e = Edge::new([far, 0.0, 0.0], [far - h, 0.0, 0.0], 1.0, -1.0);
+                assert!(e.t_min > T_MIN, "{h} {far}");
+                continue;
+            };
+            assert!(offer, "{h} {far}");
+            for i in 0..200 {
+                let x = far - h * (i as f64);
+                let p0 = [x, -x + 0.5 * h, 0.3 * x];
+                for d in [[h, 0.0, 0.0], [0.0, -h, 0.0], [h, h, 0.0], [h, h, h]] {
+                    let p1 = std::array::from_fn(|k| p0[k] + d[k]);
+                    let a = Edge::new(p0, p1, 1.0, -1.0);
+                    let b = Edge::with_t_min(p0, p1, 1.0, -1.0, t);
+                    assert_eq!((a.p0, a.d, a.t_min), (b.p0, b.d, b.t_min), "{h} {p0:?}");
+                }
+            }
+        }
     }
 
     #[test]
