@@ -74,6 +74,10 @@ impl Edge {
 /// not a probe a bisection step away from it). Positions stay `t_min`
 /// away from the ends.
 pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>) {
+    // In columns, with 32-bit lane masks and selects instead of branches
+    // (the signs of the probes are random), so every loop vectorises.
+    let mut p0 = [[0.0f32; BLOCK]; 3];
+    let mut d = [[0.0f32; BLOCK]; 3];
     for chunk in edges.chunks(BLOCK) {
         let n = chunk.len();
         let mut lo = [0.0f32; BLOCK];
@@ -83,67 +87,76 @@ pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>)
         let mut t = [0.5f32; BLOCK];
         // Edges whose samples do not bracket a root (their sign was set by
         // interval proof or the padding) keep the midpoint.
-        let mut live = [false; BLOCK];
+        let mut live = [0u32; BLOCK];
         // Which end the last step replaced (+1 inside, -1 outside, 0 none):
         // Illinois halves the value kept at the other end only when the
         // same end is replaced twice running.
-        let mut side = [0i8; BLOCK];
+        let mut side = [0i32; BLOCK];
         for (i, e) in chunk.iter().enumerate() {
+            for k in 0..3 {
+                p0[k][i] = e.p0[k];
+                d[k][i] = e.d[k];
+            }
             glo[i] = e.g0;
             ghi[i] = e.g1;
-            live[i] = e.g0 >= 0.0 && e.g1 < 0.0;
+            live[i] = (e.g0 >= 0.0 && e.g1 < 0.0) as u32;
         }
         for _ in 0..STEPS {
-            if !live[..n].iter().any(|&l| l) {
+            if live[..n].iter().all(|&l| l == 0) {
                 break;
+            }
+            // Slices of the block's length, so no index is checked.
+            let (lo, hi, glo, ghi) = (&mut lo[..n], &mut hi[..n], &mut glo[..n], &mut ghi[..n]);
+            let (t, live, side) = (&mut t[..n], &mut live[..n], &mut side[..n]);
+            for i in 0..n {
+                let s = (lo[i] * ghi[i] - hi[i] * glo[i]) / (ghi[i] - glo[i]);
+                let inner = (s > lo[i]) as u32 & (s < hi[i]) as u32;
+                let next = select(inner, s, 0.5 * (lo[i] + hi[i]));
+                t[i] = select(live[i], next, t[i]);
             }
             {
                 let (x, y, z) = ev.coords_mut();
-                for (i, e) in chunk.iter().enumerate() {
-                    if live[i] {
-                        let s = (lo[i] * ghi[i] - hi[i] * glo[i]) / (ghi[i] - glo[i]);
-                        t[i] = if s > lo[i] && s < hi[i] {
-                            s
-                        } else {
-                            0.5 * (lo[i] + hi[i])
-                        };
-                    }
-                    let p = lerp(e, t[i]);
-                    (x[i], y[i], z[i]) = (p[0], p[1], p[2]);
+                let (x, y, z) = (&mut x[..n], &mut y[..n], &mut z[..n]);
+                let (px, py, pz) = (&p0[0][..n], &p0[1][..n], &p0[2][..n]);
+                let (dx, dy, dz) = (&d[0][..n], &d[1][..n], &d[2][..n]);
+                for i in 0..n {
+                    x[i] = px[i] + t[i] * dx[i];
+                    y[i] = py[i] + t[i] * dy[i];
+                    z[i] = pz[i] + t[i] * dz[i];
                 }
             }
-            let g = ev.eval_loaded(n);
+            let g = &ev.eval_loaded(n)[..n];
             for i in 0..n {
-                if !live[i] {
-                    continue;
-                }
-                if g[i] == 0.0 {
-                    live[i] = false; // on the surface: keep t
-                } else if g[i] > 0.0 {
-                    lo[i] = t[i];
-                    glo[i] = g[i];
-                    if side[i] == 1 {
-                        ghi[i] *= 0.5;
-                    }
-                    side[i] = 1;
-                } else if g[i] < 0.0 {
-                    hi[i] = t[i];
-                    ghi[i] = g[i];
-                    if side[i] == -1 {
-                        glo[i] *= 0.5;
-                    }
-                    side[i] = -1;
-                } else {
-                    live[i] = false; // NaN: stop here
-                }
+                let gi = g[i];
+                // An inside probe replaces the inside end, an outside one
+                // the outside end; one exactly on the surface, or NaN,
+                // stops the search there. (0/1 lane flags and bit selects:
+                // the compiler keeps `if` chains scalar.)
+                let up = (gi > 0.0) as u32 & live[i];
+                let dn = (gi < 0.0) as u32 & live[i];
+                let halve_hi = up & (side[i] == 1) as u32;
+                let halve_lo = dn & (side[i] == -1) as u32;
+                lo[i] = select(up, t[i], lo[i]);
+                hi[i] = select(dn, t[i], hi[i]);
+                glo[i] = select(up, gi, select(halve_lo, glo[i] * 0.5, glo[i]));
+                ghi[i] = select(dn, gi, select(halve_hi, ghi[i] * 0.5, ghi[i]));
+                let moved = up | dn;
+                side[i] = up as i32 - dn as i32 + side[i] * (1 - moved as i32);
+                live[i] = moved;
             }
         }
         for (i, e) in chunk.iter().enumerate() {
-            let root_at_start = e.g0 == 0.0 && e.g1 < 0.0 && lo[i] == 0.0 && live[i];
+            let root_at_start = e.g0 == 0.0 && e.g1 < 0.0 && lo[i] == 0.0 && live[i] != 0;
             let ti = if root_at_start { 0.0 } else { t[i] };
             out.push(lerp(e, ti.clamp(e.t_min, 1.0 - e.t_min)));
         }
     }
+}
+
+/// `a` where `flag` is 1, `b` where it is 0, bit for bit.
+fn select(flag: u32, a: f32, b: f32) -> f32 {
+    let m = flag.wrapping_neg();
+    f32::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
 }
 
 fn lerp(e: &Edge, t: f32) -> [f32; 3] {
