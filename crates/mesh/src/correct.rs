@@ -17,6 +17,7 @@
 //! vertex's triangles arrive: the mesh is the same bytes whatever the brick
 //! size and the grouping of bricks.
 
+use crate::lanes::select;
 use microfrep_core::{BatchEval, BLOCK};
 
 /// Per-vertex sums: area-weighted normal (x, y, z) and area in units of
@@ -105,11 +106,8 @@ pub fn accumulate(
             // from f and its slope along the normal (one-sided difference).
             let slope = (f1[i] - f0[i]) * inv_step;
             let d = -f0[i] / slope;
-            gap[i] = if slope < 0.0 && d.is_finite() {
-                d.clamp(-limit, limit)
-            } else {
-                0.0
-            };
+            let ok = (slope < 0.0) as u32 & d.is_finite() as u32;
+            gap[i] = select(ok, d.clamp(-limit, limit), 0.0);
         }
         // Separate loops, so each vectorises.
         let q = |v: f32| v.round_ties_even() as i32;
@@ -184,26 +182,31 @@ pub fn apply_all(
         for i in 0..n {
             let len2 = col[0][i] * col[0][i] + col[1][i] * col[1][i] + col[2][i] * col[2][i];
             let f = scale * col[3][i] / (col[4][i] * len2.sqrt());
-            let f = if len2 > 0.0 && col[4][i] > 0.0 && f.is_finite() {
-                f
-            } else {
-                0.0
-            };
+            let ok = (len2 > 0.0) as u32 & (col[4][i] > 0.0) as u32 & f.is_finite() as u32;
+            let f = select(ok, f, 0.0);
             for k in 0..3 {
                 d[k][i] = f * col[k][i];
             }
         }
-        for (i, v) in p.iter_mut().enumerate() {
+        // Columns of the positions, so the moves vectorise too.
+        let mut c = [[0.0f32; N]; 3];
+        for (i, v) in p.iter().enumerate() {
             for k in 0..3 {
-                let (c, dk) = (v[k], d[k][i]);
-                let q = c + dk;
-                let moved = if dk > 0.0 {
-                    q.min(hi[k].max(c))
-                } else {
-                    q.max(lo[k].min(c))
-                };
-                v[k] = moved.clamp(lo[k], hi[k]);
+                c[k][i] = v[k];
             }
+        }
+        for k in 0..3 {
+            let (c, d) = (&mut c[k][..n], &d[k][..n]);
+            for i in 0..n {
+                let q = c[i] + d[i];
+                let up = q.min(hi[k].max(c[i]));
+                let down = q.max(lo[k].min(c[i]));
+                let moved = select((d[i] > 0.0) as u32, up, down);
+                c[i] = moved.clamp(lo[k], hi[k]);
+            }
+        }
+        for (i, v) in p.iter_mut().enumerate() {
+            *v = [c[0][i], c[1][i], c[2][i]];
         }
     }
 }

@@ -34,6 +34,7 @@ pub mod correct;
 pub mod cubes;
 mod grid;
 pub mod job;
+mod lanes;
 pub mod memory;
 mod pipeline;
 mod refine;

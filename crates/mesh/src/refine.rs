@@ -3,6 +3,7 @@
 //! f32 batch evaluator (one evaluation per step for the whole block; the
 //! f64 point evaluator was 5x slower than the rest of the mesher together).
 
+use crate::lanes::select;
 use microfrep_core::{BatchEval, BLOCK};
 
 /// Regula falsi steps; Illinois converges superlinearly, so a few steps
@@ -151,12 +152,6 @@ pub fn refine_edges(ev: &mut BatchEval, edges: &[Edge], out: &mut Vec<[f32; 3]>)
             out.push(lerp(e, ti.clamp(e.t_min, 1.0 - e.t_min)));
         }
     }
-}
-
-/// `a` where `flag` is 1, `b` where it is 0, bit for bit.
-fn select(flag: u32, a: f32, b: f32) -> f32 {
-    let m = flag.wrapping_neg();
-    f32::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
 }
 
 fn lerp(e: &Edge, t: f32) -> [f32; 3] {
