@@ -21,7 +21,11 @@ use crate::lanes::select;
 use microfrep_core::{BatchEval, BLOCK};
 
 /// Per-vertex sums: area-weighted normal (x, y, z) and area in units of
-/// `h^2 / 2^24`, area times gap in units of `h^3 / 2^24`.
+/// `h^2 / 2^24`, area times gap in units of `h^3 / 2^24`. A vertex's
+/// triangles lie in the few cells around its grid edge (at most 24 of
+/// them, none larger than a cell's largest cross-section, sqrt 3 cell
+/// areas; gaps at most half a cell), so every sum stays under 2^29 and
+/// plain wrapping adds are exact, in any order.
 pub type Acc = [i32; 5];
 
 /// Fixed-point units per cell area (or volume).
@@ -127,7 +131,7 @@ pub fn accumulate(
             for &v in t {
                 let s = &mut acc[v as usize];
                 for k in 0..5 {
-                    s[k] = s[k].saturating_add(add[k]);
+                    s[k] = s[k].wrapping_add(add[k]);
                 }
             }
         }
@@ -137,7 +141,7 @@ pub fn accumulate(
 /// Adds `b` into `a`.
 pub fn add(a: &mut Acc, b: &Acc) {
     for k in 0..5 {
-        a[k] = a[k].saturating_add(b[k]);
+        a[k] = a[k].wrapping_add(b[k]);
     }
 }
 
@@ -176,7 +180,7 @@ pub fn apply_all(
         };
         for i in 0..n {
             for k in 0..5 {
-                col[k][i] = a[i][k].saturating_add(b[i][k]) as f32;
+                col[k][i] = a[i][k].wrapping_add(b[i][k]) as f32;
             }
         }
         for i in 0..n {
