@@ -24,7 +24,7 @@ use microfrep_core::{BatchEval, BLOCK};
 /// `h^2 / 2^24`, area times gap in units of `h^3 / 2^24`. A vertex's
 /// triangles lie in the few cells around its grid edge (at most 24 of
 /// them, none larger than a cell's largest cross-section, sqrt 3 cell
-/// areas; gaps at most half a cell), so every sum stays under 2^29 and
+/// areas; gaps at most half a cell), so every sum stays under 2^30 and
 /// plain wrapping adds are exact, in any order.
 pub type Acc = [i32; 5];
 
