@@ -110,7 +110,9 @@ const WINDOW_BYTES_PER_TRI: f64 = 24.0;
 const WINDOW_BYTES_PER_VERT: f64 = 76.0;
 
 /// Estimated peak bytes of `plan` streamed to disk: the pipeline holds
-/// three groups of z-slabs of bricks at a time, never the whole mesh.
+/// four groups of z-slabs of bricks at a time (the one being finished, the
+/// one before it until its triangles are out, the next one, and the one
+/// being meshed meanwhile), never the whole mesh.
 pub fn streaming_bytes(plan: &Plan, e: &Estimate) -> f64 {
     streaming_bytes_grid(&plan.grid, e)
 }
@@ -118,7 +120,7 @@ pub fn streaming_bytes(plan: &Plan, e: &Estimate) -> f64 {
 /// [`streaming_bytes`] from the grid alone.
 pub fn streaming_bytes_grid(grid: &Grid, e: &Estimate) -> f64 {
     let slabs = grid.bricks[2] as f64;
-    let held = ((3 * slabs_per_group(grid)) as f64).min(slabs) / slabs;
+    let held = ((4 * slabs_per_group(grid)) as f64).min(slabs) / slabs;
     let window = held * (e.triangles * WINDOW_BYTES_PER_TRI + e.vertices * WINDOW_BYTES_PER_VERT);
     // Surface is not spread evenly over the slabs: allow twice the mean.
     2.0 * window + scratch_bytes(grid) + e.volume_bytes + FIXED

@@ -1,6 +1,6 @@
 //! The meshing pipeline, a group of z-slabs of bricks at a time, so output
 //! can leave for its sink (memory or disk) while the rest is being made and
-//! only three groups are held at once.
+//! only four groups are held at once.
 //!
 //! A brick's triangles use vertices it owns and vertices owned by bricks
 //! above it in x, y or z (see [`crate::brick`]), so group `g`'s triangles
