@@ -115,10 +115,11 @@ pub struct Summary {
     pub triangles: u64,
     /// Vertices written.
     pub vertices: u64,
-    /// Edges not shared by exactly two oppositely oriented triangles; not
-    /// known for a streamed mesh.
+    /// Edges not shared by exactly two oppositely oriented triangles
+    /// (counted while streaming for a streamed mesh; `None` only if it did
+    /// not come in the order that count needs).
     pub bad_edges: Option<usize>,
-    /// Euler characteristic V - E + F (not known when streamed).
+    /// Euler characteristic V - E + F (as `bad_edges`).
     pub euler: Option<i64>,
     /// Signed volume by the divergence theorem.
     pub volume: f64,
@@ -215,7 +216,12 @@ pub fn mesh_to_file(
         let verdict = |t: &Tally| verdict(t, sampled.as_ref());
         let (t, scale) = stream_mesh_coloured(&plan, out, normals, colour, &progress, &verdict)?;
         colour_scale = scale;
-        summary_of(&opts, &plan, &t, None, predicted, true)
+        // Counted while streaming (unknown only if the pipeline's order
+        // did not hold: the mesh is too big to be made again in memory).
+        let checked = t
+            .edges
+            .map(|(edges, bad)| (bad, t.vertices as i64 - edges as i64 + t.triangles as i64));
+        summary_of(&opts, &plan, &t, checked, predicted, true)
     } else if stl_while_meshing {
         // STL is encoded, measured and on its way to the disk while the
         // mesh is made, and its edges are counted meanwhile; its triangles
@@ -236,6 +242,7 @@ pub fn mesh_to_file(
             volume: m.measured.0,
             area: m.measured.1,
             bbox: m.bbox,
+            edges: m.edges,
         };
         verdict(&t, sampled.as_ref())?;
         let (edges, bad_edges) = match m.edges {
@@ -284,6 +291,7 @@ pub fn mesh_to_file(
             volume,
             area,
             bbox,
+            edges: None,
         };
         verdict(&t, sampled.as_ref())?;
         let file = file?;

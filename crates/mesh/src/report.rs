@@ -72,7 +72,7 @@ pub fn to_text(s: &Summary, output: &str, seconds: f64, peak_bytes: f64) -> Stri
     line!("  vertices   {}", s.vertices);
     match (s.bad_edges, s.euler) {
         (Some(b), Some(e)) => line!("  bad edges  {b} (euler {e})"),
-        _ => line!("  bad edges  not checked (streamed to disk)"),
+        _ => line!("  bad edges  not counted (the streamed mesh did not come in the order the count needs)"),
     }
     match (s.sampled_volume, s.volume_loss) {
         (Some(v), Some(l)) => line!(

@@ -121,6 +121,10 @@ pub struct Tally {
     pub area: f64,
     /// Bounding box of the vertices (min, max).
     pub bbox: [[f64; 3]; 2],
+    /// Edges and bad edges (not used exactly once each way), where an
+    /// [`crate::check::EdgeCensus`] counted them ([`Counting`]); `None`
+    /// where nothing counted or the mesh did not come in its order.
+    pub edges: Option<(usize, usize)>,
 }
 
 impl Default for Tally {
@@ -131,6 +135,7 @@ impl Default for Tally {
             volume: 0.0,
             area: 0.0,
             bbox: [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]],
+            edges: None,
         }
     }
 }
@@ -150,6 +155,33 @@ pub fn volume_area_of(t: [[f32; 3]; 3]) -> (f64, f64) {
         + p[2] * (q[0] * r[1] - q[1] * r[0]))
         / 6.0;
     (vol, area)
+}
+
+/// A sink that counts the edges of what passes through to `inner`, in one
+/// streaming pass ([`crate::check::EdgeCensus`]): the bad-edge figure of a
+/// mesh that is never held whole.
+pub struct Counting<'a> {
+    /// The sink everything is forwarded to, unchanged.
+    pub inner: &'a mut (dyn MeshSink + Send),
+    /// The census so far.
+    pub census: crate::check::EdgeCensus,
+}
+
+impl MeshSink for Counting<'_> {
+    fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
+        self.census.vertices(v.len());
+        self.inner.vertices(v)
+    }
+
+    fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError> {
+        self.census.triangles(t);
+        self.inner.triangles(t, window)
+    }
+
+    fn take_triangles(&mut self, t: Vec<[u32; 3]>, window: &VertexWindow) -> Result<(), MeshError> {
+        self.census.triangles(&t);
+        self.inner.take_triangles(t, window)
+    }
 }
 
 /// A sink that tallies and forwards to `inner`.

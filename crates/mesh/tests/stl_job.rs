@@ -79,6 +79,19 @@ fn stl_jobs_write_the_bytes_and_figures_of_meshing_in_memory() {
         assert_eq!(s.bbox, bbox(&mesh));
         assert!(!s.streamed && s.volume_loss.unwrap().abs() < 0.01, "{s:?}");
     }
+    // Streamed to disk (STL and PLY): the same figures, the edges counted
+    // while streaming.
+    for ext in ["stl", "ply"] {
+        let out = d.join(format!("streamed.{ext}"));
+        let job = JobOptions {
+            stream: true,
+            ..JobOptions::default()
+        };
+        let s = mesh_to_file(&shape, &opts, &out, &job, &|_, _| {}).unwrap();
+        assert!(s.streamed, "{s:?}");
+        assert_eq!((s.bad_edges, s.euler), (Some(0), Some(r.euler)), "{ext}");
+        std::fs::remove_file(&out).unwrap();
+    }
     assert_eq!(
         entries(&d),
         ["job1.stl", "job2.stl", "job3.stl", "reference.stl"]

@@ -50,6 +50,9 @@ fn streamed_stl_and_ply_equal_the_in_memory_files() {
         );
         assert!((t.volume - r.volume).abs() < 1e-9 && (t.area - r.area).abs() < 1e-9);
         assert_eq!(t.bbox, r.bbox);
+        // Edges counted while streaming, as the in-memory check counts them.
+        assert_eq!(t.edges, Some(microfrep_mesh::check::edges(&mesh)));
+        assert_eq!(t.edges.map(|e| e.1), Some(0));
         let left: Vec<_> = std::fs::read_dir(&d)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

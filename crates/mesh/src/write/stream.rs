@@ -9,7 +9,8 @@
 
 use super::colour::{channel_tape, eval_at, scale_of, ColourBy};
 use super::{format_of, ply, StlWriter};
-use crate::sink::{MeshSink, Tally, Tallying, VertexWindow};
+use crate::check::EdgeCensus;
+use crate::sink::{Counting, MeshSink, Tally, Tallying, VertexWindow};
 use crate::{MeshError, Plan};
 use microfrep_core::Tape;
 use microfrep_io::colormap::ColourScale;
@@ -159,12 +160,17 @@ fn stream_stl(
 ) -> Result<Tally, MeshError> {
     let w = StlWriter::new(f).map_err(io_err)?;
     let mut sink = StlSink { w };
-    let mut t = Tallying {
+    let mut counting = Counting {
         inner: &mut sink,
+        census: EdgeCensus::new(),
+    };
+    let mut t = Tallying {
+        inner: &mut counting,
         tally: Tally::default(),
     };
     plan.run_into(&mut t, progress)?;
-    let tally = t.tally;
+    let mut tally = t.tally;
+    tally.edges = counting.census.finish();
     sink.w.finish().map_err(io_err)?;
     Ok(tally)
 }
@@ -193,12 +199,17 @@ fn stream_ply(
         seen: [f64::INFINITY, f64::NEG_INFINITY],
         buf: Vec::new(),
     };
-    let mut t = Tallying {
+    let mut counting = Counting {
         inner: &mut sink,
+        census: EdgeCensus::new(),
+    };
+    let mut t = Tallying {
+        inner: &mut counting,
         tally: Tally::default(),
     };
     plan.run_into(&mut t, progress)?;
-    let tally = t.tally;
+    let mut tally = t.tally;
+    tally.edges = counting.census.finish();
     sink.verts.flush().map_err(io_err)?;
     sink.faces.flush().map_err(io_err)?;
     let seen = sink.seen;
