@@ -215,11 +215,10 @@ impl MeshSink for StlJob<'_> {
         self.census.vertices(v.len());
         self.vertices.extend_from_slice(v);
         let [lo, hi] = &mut self.bbox;
-        for p in v {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
+        let (l, h) = bounds_of(v);
+        for a in 0..3 {
+            lo[a] = lo[a].min(l[a]);
+            hi[a] = hi[a].max(h[a]);
         }
         Ok(())
     }
@@ -232,6 +231,35 @@ impl MeshSink for StlJob<'_> {
         }
         Ok(())
     }
+}
+
+/// The least and greatest coordinates of `v` on each axis (infinite ends
+/// for no points; the points are finite). Eight points at a time as one
+/// flat row of 24 coordinates, so the comparisons vectorise.
+fn bounds_of(v: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::INFINITY; 24];
+    let mut hi = [f32::NEG_INFINITY; 24];
+    let blocks = v.chunks_exact(8);
+    let rest = blocks.remainder();
+    for b in blocks {
+        let flat: &[f32; 24] = b.as_flattened().try_into().expect("8 points");
+        for j in 0..24 {
+            lo[j] = if flat[j] < lo[j] { flat[j] } else { lo[j] };
+            hi[j] = if flat[j] > hi[j] { flat[j] } else { hi[j] };
+        }
+    }
+    let (mut l, mut h) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for j in 0..24 {
+        l[j % 3] = l[j % 3].min(lo[j]);
+        h[j % 3] = h[j % 3].max(hi[j]);
+    }
+    for p in rest {
+        for a in 0..3 {
+            l[a] = l[a].min(p[a]);
+            h[a] = h[a].max(p[a]);
+        }
+    }
+    (l, h)
 }
 
 /// The corners of triangle `t`. (Written out: `[T; 3]::map` was not
@@ -411,6 +439,26 @@ impl<W: Write + Seek> StlWriter<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bounds_of_any_count_of_points_are_the_plain_min_and_max() {
+        for n in [0usize, 1, 7, 8, 9, 23, 24, 100] {
+            let v: Vec<[f32; 3]> = (0..n)
+                .map(|i| {
+                    let x = i as f32;
+                    [(x * 0.37).sin(), -(x * 1.3).cos() * 5.0, x - 40.0]
+                })
+                .collect();
+            let mut want = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+            for p in &v {
+                for a in 0..3 {
+                    want.0[a] = want.0[a].min(p[a]);
+                    want.1[a] = want.1[a].max(p[a]);
+                }
+            }
+            assert_eq!(bounds_of(&v), want, "{n} points");
+        }
+    }
 
     #[test]
     fn measured_volume_and_area_equal_the_checks_bit_for_bit() {
