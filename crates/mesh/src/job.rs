@@ -230,8 +230,11 @@ pub fn mesh_to_file(
         // verdict passes (dropped, the file is removed).
         colour_scale = None;
         let sample = job.max_volume_loss.is_some() && sampled.is_none();
+        // Over the estimate (pages not written are never taken, so a
+        // generous reservation costs nothing).
+        let expected = (1.25 * est.vertices).min(u32::MAX as f64) as usize;
         let (meshed, v) = rayon::join(
-            || crate::write::mesh_to_stl(&plan, out, &progress),
+            || crate::write::mesh_to_stl(&plan, out, expected, &progress),
             || sample.then(|| sampled_volume(&plan)),
         );
         sampled = sampled.or(v);

@@ -152,6 +152,7 @@ pub fn write_uncommitted_measured(
 pub(crate) fn mesh_to_stl(
     plan: &crate::Plan,
     out: &Path,
+    expected_vertices: usize,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(AtomicFile, stl::StlJobSummary), MeshError> {
     let mut f = AtomicFile::create(out)?;
@@ -159,7 +160,7 @@ pub(crate) fn mesh_to_stl(
         path: out.display().to_string(),
         source: e,
     };
-    let mut sink = stl::StlJob::new(&mut f).map_err(at)?;
+    let mut sink = stl::StlJob::new(&mut f, expected_vertices).map_err(at)?;
     plan.run_into(&mut sink, progress).map_err(|e| match e {
         MeshError::Stream(e) => at(e),
         e => e,

@@ -124,14 +124,16 @@ pub(crate) struct StlJob<'a> {
 }
 
 impl<'a> StlJob<'a> {
-    /// Writes the header (the count is patched by `finish`).
-    pub(crate) fn new(out: &'a mut AtomicFile) -> std::io::Result<Self> {
+    /// Writes the header (the count is patched by `finish`); room is made
+    /// for `expected_vertices` (the job's estimate), so the vertices are
+    /// not copied again as they grow.
+    pub(crate) fn new(out: &'a mut AtomicFile, expected_vertices: usize) -> std::io::Result<Self> {
         out.write_all(&header())?;
         out.write_all(&0u32.to_le_bytes())?;
         Ok(StlJob {
             out,
             enc: Encoder::default(),
-            vertices: Vec::new(),
+            vertices: Vec::with_capacity(expected_vertices),
             waiting: Vec::new(),
             counted: 0,
             census: EdgeCensus::new(),
