@@ -23,6 +23,7 @@ use crate::sink::{MeshSink, VertexWindow};
 use crate::{MeshError, Plan};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// A group's work after stage A, per brick.
 #[derive(Default)]
@@ -36,6 +37,20 @@ struct Work {
     foreign: Vec<(u32, u32)>,
     /// The brick's triangles, in global vertex indices after stage A.
     tris: Vec<[u32; 3]>,
+}
+
+/// A scratch lent from a pipeline's pool, given back when dropped.
+struct Lent<'a> {
+    s: Option<Scratch>,
+    pool: &'a Mutex<Vec<Scratch>>,
+}
+
+impl Drop for Lent<'_> {
+    fn drop(&mut self) {
+        if let (Some(s), Ok(mut p)) = (self.s.take(), self.pool.lock()) {
+            p.push(s);
+        }
+    }
 }
 
 /// Consecutive bricks `first..first + meshes.len()` (whole z-slabs).
@@ -123,6 +138,7 @@ impl Plan {
         range: std::ops::Range<usize>,
         next_vertex: &mut u64,
         done: &AtomicUsize,
+        scratch: &Mutex<Vec<Scratch>>,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Group, MeshError> {
         let first = range.start;
@@ -133,20 +149,30 @@ impl Plan {
             lo: clamp.lo,
             hi: clamp.hi,
         };
+        // Scratch buffers (evaluators, tables) are made once per thread and
+        // lent to every split of every group (rayon makes a dozen splits
+        // per group), not made afresh for each.
+        let lend = || {
+            let s = scratch.lock().ok().and_then(|mut p| p.pop());
+            Lent {
+                s: Some(s.unwrap_or_else(|| {
+                    Scratch::new(&self.tape, self.grid.brick, self.simplify, finish)
+                })),
+                pool: scratch,
+            }
+        };
         let mut meshes: Vec<BrickMesh> = range
             .into_par_iter()
-            .map_init(
-                || Scratch::new(&self.tape, self.grid.brick, self.simplify, finish),
-                |s, k| {
-                    if self.classes[k] != BrickClass::Surface {
-                        return BrickMesh::default();
-                    }
-                    let b = self.grid.brick_coords(k);
-                    let m = mesh_brick(&self.grid, &self.classes, self.table, b, s);
-                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                    m
-                },
-            )
+            .map_init(lend, |s, k| {
+                let s = s.s.as_mut().expect("lent until dropped");
+                if self.classes[k] != BrickClass::Surface {
+                    return BrickMesh::default();
+                }
+                let b = self.grid.brick_coords(k);
+                let m = mesh_brick(&self.grid, &self.classes, self.table, b, s);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                m
+            })
             .collect();
         let base = *next_vertex;
         let mut offsets = Vec::with_capacity(meshes.len());
@@ -308,6 +334,7 @@ pub fn run(
     let per_group = plan.slabs_per_group() * grid.bricks[0] * grid.bricks[1];
     let total = grid.brick_count();
     let done = AtomicUsize::new(0);
+    let scratch = Mutex::new(Vec::new());
     let mut next_vertex = 0u64;
     let mut starts = (0..total).step_by(per_group);
     let mut mesh_next = || -> Result<Option<Group>, MeshError> {
@@ -317,6 +344,7 @@ pub fn run(
                     s..(s + per_group).min(total),
                     &mut next_vertex,
                     &done,
+                    &scratch,
                     progress,
                 )
                 .map(Some),
