@@ -30,6 +30,9 @@ pub type Acc = [i32; 5];
 
 /// Fixed-point units per cell area (or volume).
 const UNIT: f32 = (1u32 << 24) as f32;
+/// Bound of a quantised contribution (far above any real one: a triangle
+/// within a cell has at most sqrt 3 cell areas).
+const LIMIT: f32 = (1u32 << 30) as f32;
 
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [
@@ -60,9 +63,10 @@ pub fn accumulate(
     const HALF: usize = BLOCK / 2;
     let step = (h / 8.0) as f32;
     let inv_step = 1.0 / step;
-    let limit = (h / 2.0) as f32;
-    let to_area = (UNIT as f64 / (h * h)) as f32;
-    let to_volume = (UNIT as f64 / (h * h * h)) as f32;
+    // Edges, normals and areas are taken in cell units, so they neither
+    // underflow nor overflow f32 whatever the cell size (a grid of cells
+    // of 1e-21 has areas of 1e-42, below f32's normal range).
+    let inv_h = (1.0 / h) as f32;
     // Centroids, the edges q - p and r - p, area normals, areas.
     let mut cen = [[0.0f32; HALF]; 3];
     let mut e1 = [[0.0f32; HALF]; 3];
@@ -76,8 +80,8 @@ pub fn accumulate(
             let [a, b, c] = t.map(|v| pos[v as usize]);
             for k in 0..3 {
                 cen[k][i] = (a[k] + b[k] + c[k]) * (1.0 / 3.0);
-                e1[k][i] = b[k] - a[k];
-                e2[k][i] = c[k] - a[k];
+                e1[k][i] = (b[k] - a[k]) * inv_h;
+                e2[k][i] = (c[k] - a[k]) * inv_h;
             }
         }
         {
@@ -109,22 +113,31 @@ pub fn accumulate(
             // Gap along the outward normal from the centroid to the surface,
             // from f and its slope along the normal (one-sided difference).
             let slope = (f1[i] - f0[i]) * inv_step;
-            let d = -f0[i] / slope;
+            // In cells, at most half a cell either way.
+            let d = -f0[i] / slope * inv_h;
             let ok = (slope < 0.0) as u32 & d.is_finite() as u32;
-            gap[i] = select(ok, d.clamp(-limit, limit), 0.0);
+            gap[i] = select(ok, d.clamp(-0.5, 0.5), 0.0);
         }
         // Separate loops, so each vectorises.
-        let q = |v: f32| v.round_ties_even() as i32;
+        // Rounded to the nearest unit, kept within +-2^30 (NaN-free: `max`
+        // and `min` drop a NaN), where the conversion is exact.
+        let q = |v: f32| {
+            let r = v.round_ties_even().max(-LIMIT).min(LIMIT);
+            // SAFETY: `r` is finite and within the range of i32 (see above),
+            // where the conversion is defined (and vectorises, unlike the
+            // saturating `as`).
+            unsafe { r.to_int_unchecked::<i32>() }
+        };
         for k in 0..3 {
             for i in 0..n {
-                sums[k][i] = q(an[k][i] * to_area);
+                sums[k][i] = q(an[k][i] * UNIT);
             }
         }
         for i in 0..n {
-            sums[3][i] = q(area[i] * gap[i] * to_volume);
+            sums[3][i] = q(area[i] * gap[i] * UNIT);
         }
         for i in 0..n {
-            sums[4][i] = q(area[i] * to_area);
+            sums[4][i] = q(area[i] * UNIT);
         }
         for (i, t) in chunk.iter().enumerate() {
             let add = [0, 1, 2, 3, 4].map(|k| sums[k][i]);
