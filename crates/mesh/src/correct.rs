@@ -120,7 +120,9 @@ pub fn accumulate(
         }
         // Separate loops, so each vectorises.
         // Rounded to the nearest unit, kept within +-2^30 (NaN-free: `max`
-        // and `min` drop a NaN), where the conversion is exact.
+        // and `min` drop a NaN, where `clamp` would keep it), where the
+        // conversion is exact.
+        #[allow(clippy::manual_clamp)]
         let q = |v: f32| {
             let r = v.round_ties_even().max(-LIMIT).min(LIMIT);
             // SAFETY: `r` is finite and within the range of i32 (see above),
