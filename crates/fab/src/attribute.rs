@@ -17,8 +17,11 @@ use std::sync::{Arc, Mutex};
 /// 8-bit grey layers of attribute channel `channel` (0-based index into
 /// [`Shape::attributes`]).
 ///
-/// The channel is compiled alone, once per stack, and cut to the branches
-/// each layer needs. Bands of rows are sampled for the shape's value (as
+/// The channel is compiled alone, once per stack (with the costly
+/// operations of a select's two branches, such as the two powers of a
+/// gain, run once on the picked operand: the same bits), and cut to the
+/// branches each layer needs, with the identities the cuts leave (`x * 1`,
+/// zero terms of decided derivatives) folded away. Bands of rows are sampled for the shape's value (as
 /// [`rasterize`] samples it) and graded at once, in parallel. Only pixels
 /// inside the solid are evaluated: tiles with no inside pixel are skipped,
 /// tiles whose interval bounds give one grey level (with a margin far wider
@@ -203,6 +206,14 @@ fn channel_expr(shape: &Shape, channel: usize) -> microfrep_core::Expr {
     shape.attributes()[channel].expr.with_integer_powers()
 }
 
+/// The channel's tape as the stack evaluates it: [`channel_expr`] with the
+/// costly operations of both branches of a select evaluated once
+/// ([`Tape::merge_branches`]: the same bits at every point).
+fn channel_tape(shape: &Shape, channel: usize) -> Tape {
+    let t = Tape::new(&channel_expr(shape, channel));
+    t.merge_branches().unwrap_or(t)
+}
+
 /// Rough cost per point of evaluating `t` in batches, in units of one
 /// vectorised add: the transcendental kernels (f64 polynomials, and the
 /// scalar library calls for the rarer ones) weigh tens of simple steps, so
@@ -334,7 +345,7 @@ impl AttributeStack {
         }
         Ok(AttributeStack {
             channel,
-            tape: Tape::new(&channel_expr(shape, channel)),
+            tape: channel_tape(shape, channel),
             known: Arc::default(),
         })
     }
@@ -380,7 +391,7 @@ impl AttributeStack {
                 Interval::with_f32_ends(grid.y(0), grid.y(ny - 1)),
                 Interval::with_f32_ends(z, z),
             );
-            match self.tape.simplify(iv.values(), Simplify::Exact) {
+            match self.tape.simplify(iv.values(), Simplify::Folded) {
                 Some(t) => self.known.get(t),
                 None => self.tape.clone(),
             }
@@ -544,7 +555,7 @@ impl Band<'_> {
         if big && ev.branches {
             let short = ev
                 .tape
-                .simplify(ev.interval.values(), Simplify::Exact)
+                .simplify(ev.interval.values(), Simplify::Folded)
                 .map(|t| (tape_cost(&t), t))
                 .filter(|(c, _)| 10 * c < 8 * ev.cost);
             let saved = short.as_ref().map_or(0, |(c, _)| ev.cost - c);
