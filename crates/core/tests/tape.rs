@@ -236,3 +236,58 @@ fn integer_powers_keep_values() {
         }
     }
 }
+
+/// Divisions by constants become products with the inverse: none is left
+/// (except by constants without a normal f32 inverse), powers of two give
+/// the same bits, others agree within an ulp or two in f32 and f64 (also
+/// at zero, infinite and NaN numerators), and parts without divisions are
+/// shared.
+#[test]
+fn constant_divisors_are_inverted() {
+    use microfrep_core::BatchEval;
+    let [x, y, z] = Expr::xyz();
+    let plain = x.square() + &y;
+    let e = (&x / 3.0 + &y / 0.25) / 7.5 - (&z / 0.1).sin() / &y + &plain / 1e-39 + &x / 1e39;
+    let r = e.with_constant_divisors_inverted();
+    let divs = |t: &Tape| t.listing().matches(" div ").count();
+    let (te, tr) = (Tape::new(&e), Tape::new(&r));
+    assert_eq!(divs(&te), 7, "{}", te.listing());
+    // The division by y and those by 1e-39 and 1e39 (inverses not normal
+    // in f32) stay.
+    assert_eq!(divs(&tr), 3, "{}", tr.listing());
+    assert!(std::ptr::eq(
+        plain.with_constant_divisors_inverted().node(),
+        plain.node()
+    ));
+    let quarter = (&x / 0.25).with_constant_divisors_inverted();
+    let (mut a, mut b) = (PointEval::new(&te), PointEval::new(&tr));
+    let (mut ba, mut bb) = (BatchEval::new(&te), BatchEval::new(&tr));
+    let mut bq = (
+        BatchEval::new(&Tape::new(&(&x / 0.25))),
+        BatchEval::new(&Tape::new(&quarter)),
+    );
+    for &px in &[-2.0, -0.0, 0.0, 0.3, 1.7, 1e30, f64::INFINITY, f64::NAN] {
+        for &py in &[0.5, -3.0] {
+            for &pz in &[0.05, -0.4] {
+                let (u, v) = (a.eval([px, py, pz]), b.eval([px, py, pz]));
+                let close = |u: f64, v: f64, tol: f64| {
+                    u == v || (u - v).abs() <= tol * u.abs() || (u.is_nan() && v.is_nan())
+                };
+                assert!(close(u, v, 1e-15), "f64 at ({px}, {py}, {pz}): {u} vs {v}");
+                let (p, q, w) = ([px as f32], [py as f32], [pz as f32]);
+                let (mut fu, mut fv) = ([0f32], [0f32]);
+                ba.eval(&p, &q, &w, &mut fu);
+                bb.eval(&p, &q, &w, &mut fv);
+                assert!(
+                    close(fu[0] as f64, fv[0] as f64, 5e-7),
+                    "f32 at ({px}, {py}, {pz}): {} vs {}",
+                    fu[0],
+                    fv[0]
+                );
+                bq.0.eval(&p, &q, &w, &mut fu);
+                bq.1.eval(&p, &q, &w, &mut fv);
+                assert!(fu[0].to_bits() == fv[0].to_bits() || fu[0].is_nan() && fv[0].is_nan());
+            }
+        }
+    }
+}
