@@ -32,9 +32,10 @@ use std::sync::{Arc, Mutex};
 /// evaluator. Tile sizes whose bounds did not pay on a layer's probe bands
 /// are bounded only now and then on its other bands. Every grey level is
 /// the one f32 evaluation of the whole channel at the pixel centre gives
-/// (with its real powers of whole exponents evaluated as integer powers,
-/// which moves a level only where the exact value is within a few f32
-/// roundings of a half level).
+/// (with its real powers of whole exponents evaluated as integer powers
+/// and its divisions by constants as products with their inverses, which
+/// moves a level only where the exact value is within a few f32 roundings
+/// of a half level).
 #[derive(Clone, Debug)]
 pub struct AttributeStack {
     /// The channel.
@@ -151,7 +152,11 @@ struct Evals {
 }
 
 impl Evals {
-    fn new(tape: &Tape) -> Evals {
+    /// Evaluators of `tape` for points at height `z` (set in every lane
+    /// once: the batch evaluator never writes its inputs).
+    fn new(tape: &Tape, z: f32) -> Evals {
+        let mut batch = BatchEval::new(tape);
+        batch.coords_mut().2.fill(z);
         Evals {
             tape: tape.clone(),
             cost: tape_cost(tape),
@@ -159,7 +164,7 @@ impl Evals {
                 use microfrep_core::{BinaryOp as B, Op};
                 matches!(op, Op::Binary(B::Min | B::Max, ..) | Op::Select(..))
             }),
-            batch: BatchEval::new(tape),
+            batch,
             interval: IntervalEval::new(tape),
             idx: Box::new([0; BLOCK]),
             n: 0,
@@ -199,11 +204,15 @@ fn same_tape(a: &Tape, b: &Tape) -> bool {
 
 /// The channel's expression as the stack evaluates it: real powers with
 /// whole exponents as integer powers (a few multiplications instead of the
-/// exp/ln kernels: a few f32 roundings, far below the half level of 1/510
-/// that could move a level, so within one level of the exact value as
-/// before).
+/// exp/ln kernels) and divisions by constants as products with their
+/// inverses (a multiplication instead of a division): a few f32 roundings,
+/// far below the half level of 1/510 that could move a level, so within
+/// one level of the exact value as before.
 fn channel_expr(shape: &Shape, channel: usize) -> microfrep_core::Expr {
-    shape.attributes()[channel].expr.with_integer_powers()
+    shape.attributes()[channel]
+        .expr
+        .with_integer_powers()
+        .with_constant_divisors_inverted()
 }
 
 /// The channel's tape as the stack evaluates it: [`channel_expr`] with the
@@ -270,6 +279,8 @@ const CACHED_TAPES: usize = 8;
 struct Worker<'a> {
     evals: Vec<Evals>,
     known: &'a Known,
+    /// The layer's height, in f32.
+    z: f32,
 }
 
 impl Worker<'_> {
@@ -278,7 +289,7 @@ impl Worker<'_> {
         if let Some(e) = (1..self.evals.len()).find(|&e| same_tape(&self.evals[e].tape, &t)) {
             return e;
         }
-        self.evals.push(Evals::new(&self.known.get(t)));
+        self.evals.push(Evals::new(&self.known.get(t), self.z));
         self.evals.len() - 1
     }
 
@@ -399,8 +410,9 @@ impl AttributeStack {
         let tiles = nx.div_ceil(TILE);
         let init = || {
             let w = Worker {
-                evals: vec![Evals::new(&tape)],
+                evals: vec![Evals::new(&tape, z as f32)],
                 known: &self.known,
+                z: z as f32,
             };
             (BandRaster::new(shape), w, Vec::new())
         };
@@ -596,7 +608,6 @@ impl Band<'_> {
             return;
         }
         let ev = &mut w.evals[e];
-        let zf = self.z as f32;
         let cols = at[0]..at[0] + size[0];
         for j in at[1]..at[1] + size[1] {
             let mut m = self.inside(j, &cols);
@@ -611,15 +622,22 @@ impl Band<'_> {
             let r = self.row(j) + cols.start;
             let xs = &self.xs[cols.clone()];
             let n = ev.n;
-            let (x, y, zz) = ev.batch.coords_mut();
+            let (x, y, _) = ev.batch.coords_mut();
             y[n..n + count].fill(yf);
-            zz[n..n + count].fill(zf);
             let (x, idx) = (&mut x[n..n + count], &mut ev.idx[n..n + count]);
-            for (xq, iq) in x.iter_mut().zip(idx) {
-                let k = m.trailing_zeros() as usize;
-                *xq = xs[k];
-                *iq = r + k;
-                m &= m - 1;
+            if count == xs.len() {
+                // The whole row of the leaf: no bits to walk.
+                x.copy_from_slice(xs);
+                for (k, iq) in idx.iter_mut().enumerate() {
+                    *iq = r + k;
+                }
+            } else {
+                for (xq, iq) in x.iter_mut().zip(idx) {
+                    let k = m.trailing_zeros() as usize;
+                    *xq = xs[k];
+                    *iq = r + k;
+                    m &= m - 1;
+                }
             }
             ev.n = n + count;
         }
@@ -765,8 +783,9 @@ mod tests {
         let root = Tape::new(&(&x * 0.0 + 0.25));
         let known = Known::default();
         let mut w = Worker {
-            evals: vec![Evals::new(&root)],
+            evals: vec![Evals::new(&root, 0.0)],
             known: &known,
+            z: 0.0,
         };
         let mut rows = vec![0u8; (tapes.len() + 1) * BLOCK];
         let mut want = vec![0u8; rows.len()];
