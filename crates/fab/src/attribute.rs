@@ -32,10 +32,11 @@ use std::sync::{Arc, Mutex};
 /// evaluator. Tile sizes whose bounds did not pay on a layer's probe bands
 /// are bounded only now and then on its other bands. Every grey level is
 /// the one f32 evaluation of the whole channel at the pixel centre gives
-/// (with its real powers of whole exponents evaluated as integer powers
-/// and its divisions by constants as products with their inverses, which
-/// moves a level only where the exact value is within a few f32 roundings
-/// of a half level).
+/// (with its real powers of whole exponents evaluated as integer powers,
+/// a power next to one with the exponent one more as their quotient by
+/// the base, and its divisions by constants as products with their
+/// inverses, which moves a level only where the exact value is within a
+/// few f32 roundings of a half level).
 #[derive(Clone, Debug)]
 pub struct AttributeStack {
     /// The channel.
@@ -204,14 +205,17 @@ fn same_tape(a: &Tape, b: &Tape) -> bool {
 
 /// The channel's expression as the stack evaluates it: real powers with
 /// whole exponents as integer powers (a few multiplications instead of the
-/// exp/ln kernels) and divisions by constants as products with their
-/// inverses (a multiplication instead of a division): a few f32 roundings,
-/// far below the half level of 1/510 that could move a level, so within
-/// one level of the exact value as before.
+/// exp/ln kernels), a real power next to the power of the same base with
+/// the exponent one more (a gradient's) as the quotient of that power and
+/// the base (one power kernel instead of two), and divisions by constants
+/// as products with their inverses (a multiplication instead of a
+/// division): a few f32 roundings, far below the half level of 1/510 that
+/// could move a level, so within one level of the exact value as before.
 fn channel_expr(shape: &Shape, channel: usize) -> microfrep_core::Expr {
     shape.attributes()[channel]
         .expr
         .with_integer_powers()
+        .with_neighbour_powers_shared()
         .with_constant_divisors_inverted()
 }
 
@@ -679,8 +683,9 @@ fn tile_mask(vals: &[f32; TILE]) -> u64 {
 }
 
 /// The grey levels of layer `k` the straightforward way, for tests: the
-/// shape's value and the channel as the stack evaluates it (with integer
-/// powers) compiled together, evaluated at every pixel centre.
+/// shape's value and the channel as the stack evaluates it (its integer
+/// powers, shared powers and inverted constant divisors) compiled
+/// together, evaluated at every pixel centre.
 #[doc(hidden)]
 pub fn reference_layer_pixels(
     shape: &Shape,

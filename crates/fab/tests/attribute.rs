@@ -18,9 +18,10 @@ use microfrep_fab::{rasterize, AttributeStack, SliceGrid};
 /// many shorter tapes are in use at once), powers with whole exponents
 /// (odd of negative bases, negative), which the stack evaluates as integer
 /// powers, divisions by constants, which it evaluates as products with the
-/// inverses, and a ramp over the normalised depth of a union of two
-/// ellipsoids (a gradient written out, with the derivative of the max
-/// as selects of 1 and 0 that tiles decide).
+/// inverses, a power with its gradient (whose power with the exponent one
+/// less the stack shares with it), and a ramp over the normalised depth of
+/// a union of two ellipsoids (a gradient written out, with the derivative
+/// of the max as selects of 1 and 0 that tiles decide).
 fn graded_ball() -> Shape {
     let [x, y, z] = Expr::xyz();
     let r2 = x.square() + y.square() + z.square();
@@ -50,6 +51,10 @@ fn graded_ball() -> Shape {
         .with_attribute("gain", gain)
         .with_attribute("steps", steps)
         .with_attribute("ratio", (&x / 0.3 + &y / 7.0) / 3.0 + 0.5 + &z / 0.25)
+        .with_attribute("power_gradient", {
+            let s = (x.square() + 2.0 * y.square() + 0.05).pow(0.3);
+            0.2 + 0.5 * &s + 0.04 * &s.gradient()[0]
+        })
         .with_attribute("depth", {
             let e1 = 1.0 - (x.square() / 0.8 + y.square() / 0.5 + z.square());
             let e2 = 1.0 - ((&x - 0.3).square() * 4.0 + y.square() / 0.9 + z.square() / 0.7);
@@ -69,7 +74,7 @@ fn culled_attribute_layers_equal_full_evaluation() {
     let shape = graded_ball();
     let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.07, 0.011).unwrap();
     assert!(grid.nx > 150 && grid.layers > 20);
-    for channel in 0..8 {
+    for channel in 0..9 {
         let stack = AttributeStack::new(&shape, channel).unwrap();
         let attr = Tape::new(&shape.attributes()[channel].expr);
         let mut point = PointEval::new(&attr);
@@ -112,9 +117,9 @@ fn culled_attribute_layers_equal_full_evaluation() {
 #[test]
 fn attribute_stack_refuses_missing_channel() {
     let shape = graded_ball();
-    let e = AttributeStack::new(&shape, 8).unwrap_err().to_string();
+    let e = AttributeStack::new(&shape, 9).unwrap_err().to_string();
     assert!(
-        e.contains("attribute 9 does not exist") && e.contains("8 attribute"),
+        e.contains("attribute 10 does not exist") && e.contains("9 attribute"),
         "{e}"
     );
 }
