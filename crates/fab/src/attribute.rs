@@ -95,20 +95,35 @@ impl Payoff {
     fn paid(self) -> bool {
         self.tries < 2 || 4 * self.gained >= BOUND_PIXELS * self.spent
     }
+
+    /// Bound one tile in this many: every one where bounding paid, one in
+    /// 16 where it saved too little, one in 64 where it saved nothing at
+    /// all (a long channel whose bounds decide nothing: each costs as much
+    /// as sampling hundreds of pixels).
+    fn stride(self) -> u32 {
+        if self.paid() {
+            1
+        } else if self.gained == 0 {
+            64
+        } else {
+            16
+        }
+    }
 }
 
 /// Which tile sizes a band bounds, and what bounding them gave.
 struct Policy {
-    /// Per [`Payoff::level`]: bound every tile (else every 16th).
-    bound: [bool; 3],
+    /// Per [`Payoff::level`]: bound one tile in this many
+    /// ([`Payoff::stride`]).
+    stride: [u32; 3],
     skipped: Cell<[u32; 3]>,
     seen: Cell<[Payoff; 3]>,
 }
 
 impl Policy {
-    fn new(bound: [bool; 3]) -> Policy {
+    fn new(stride: [u32; 3]) -> Policy {
         Policy {
-            bound,
+            stride,
             skipped: Cell::new([0; 3]),
             seen: Cell::new([Payoff::default(); 3]),
         }
@@ -116,13 +131,13 @@ impl Policy {
 
     /// Whether to bound the next tile of `level`.
     fn worth(&self, level: usize) -> bool {
-        if self.bound[level] {
+        if self.stride[level] <= 1 {
             return true;
         }
         let mut s = self.skipped.get();
         s[level] += 1;
         self.skipped.set(s);
-        s[level] % 16 == 0
+        s[level] % self.stride[level] == 0
     }
 
     /// A tile of `level` bounded with a tape of `cost`, saving `gained`
@@ -423,13 +438,13 @@ impl AttributeStack {
         // Each band is sampled (the shape's value, as `rasterize` samples
         // it) and then graded while its values are in cache.
         type State<'a> = (BandRaster, Worker<'a>, Vec<f32>);
-        let band = |(raster, w, values): &mut State<'_>, (j0, rows): (usize, &mut [u8]), bound| {
+        let band = |(raster, w, values): &mut State<'_>, (j0, rows): (usize, &mut [u8]), stride| {
             let h = rows.len() / nx;
             values.resize(h * nx, 0.0);
             raster.band(grid, z, j0, values);
             let band = Band {
                 grid,
-                policy: Policy::new(bound),
+                policy: Policy::new(stride),
                 z,
                 xs: &xs,
                 j0,
@@ -456,20 +471,20 @@ impl AttributeStack {
         let (mut seen, mut solid) = ([Payoff::default(); 3], 0);
         let mut state = init();
         for b in rest.by_ref() {
-            let (s, n) = band(&mut state, b, [true; 3]);
+            let (s, n) = band(&mut state, b, [1; 3]);
             seen = std::array::from_fn(|l| seen[l].add(s[l]));
             solid += n;
             if seen[0].tries + seen[1].tries >= 2 {
                 break;
             }
         }
-        let bound = seen.map(Payoff::paid);
+        let stride = seen.map(Payoff::stride);
         solid += rest
             .collect::<Vec<_>>()
             .into_par_iter()
-            .map_init(init, |s, b| band(s, b, bound).1)
+            .map_init(init, |s, b| band(s, b, stride).1)
             .sum::<u64>();
-        (pixels, bound, solid)
+        (pixels, seen.map(Payoff::paid), solid)
     }
 }
 
