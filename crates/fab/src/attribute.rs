@@ -866,6 +866,26 @@ mod tests {
         assert_eq!(fast, reference_layer_pixels(&shape, &grid, k, 0));
     }
 
+    /// Bounding a tile size is kept for every tile while the probes tell
+    /// nothing or it paid, one in 16 where it saved too little, one in 64
+    /// where it saved nothing; and a band bounds just those tiles.
+    #[test]
+    fn strides_follow_what_bounding_saved() {
+        use super::{Payoff, Policy, BOUND_PIXELS};
+        let p = |tries, spent, gained| Payoff {
+            tries,
+            spent,
+            gained,
+        };
+        assert_eq!(p(1, 500, 0).stride(), 1);
+        assert_eq!(p(4, 100, 100 * BOUND_PIXELS / 4).stride(), 1);
+        assert_eq!(p(4, 100, 100).stride(), 16);
+        assert_eq!(p(4, 100, 0).stride(), 64);
+        let policy = Policy::new([1, 16, 64]);
+        let count = |level| (0..256).filter(|_| policy.worth(level)).count();
+        assert_eq!((count(0), count(1), count(2)), (256, 16, 4));
+    }
+
     /// The vectorisable level equals `round(255 clamp(s, 0, 1))` with a
     /// saturating cast (NaN to 0) on every f32 in [-0.5, 1.5] near the
     /// level boundaries and on the special values.
