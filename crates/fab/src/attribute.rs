@@ -137,7 +137,7 @@ impl Policy {
         let mut s = self.skipped.get();
         s[level] += 1;
         self.skipped.set(s);
-        s[level] % self.stride[level] == 0
+        s[level].is_multiple_of(self.stride[level])
     }
 
     /// A tile of `level` bounded with a tape of `cost`, saving `gained`
