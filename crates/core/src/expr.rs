@@ -400,6 +400,87 @@ impl Expr {
         })
     }
 
+    /// This expression with every division by a constant `c` written as
+    /// the product with the constant `1 / c` (where both are normal
+    /// numbers in f32): the same function, a multiplication instead of a
+    /// division in f32 (several times faster), at the price of one more
+    /// rounding (the quotient is exact for powers of two, else within
+    /// about 1 ulp in f32). For consumers that quantise values far more
+    /// coarsely than that. Subexpressions without such divisions are
+    /// shared with `self`.
+    pub fn with_constant_divisors_inverted(&self) -> Expr {
+        let inverse = |e: &Expr| {
+            e.as_const()
+                .filter(|c| (*c as f32).is_normal())
+                .map(|c| 1.0 / c)
+                .filter(|r| (*r as f32).is_normal())
+        };
+        self.rewrite(|cur, m| match cur.node() {
+            ExprNode::Binary(BinaryOp::Div, a, b) if inverse(b).is_some() => {
+                m(a) * Expr::constant(inverse(b).unwrap_or(1.0))
+            }
+            _ if cur.children().iter().all(|&c| Arc::ptr_eq(&m(c).0, &c.0)) => cur.clone(),
+            _ => cur.with_children(m),
+        })
+    }
+
+    /// This expression with a real power `pow(x, f - 1)` (not a whole
+    /// exponent) written as `pow(x, f) / x` where `pow(x, f)` of the same
+    /// base `x` is in the expression too, as the derivative of a power
+    /// makes it (`f - 1` as f64 computes it): one power kernel instead of two. At `x = +-0` and
+    /// `x = +-inf` the quotient would be NaN, so those bases take the
+    /// power's value there (0 or infinity, a constant); elsewhere the same
+    /// function at the price of one more rounding (within about 2 ulps in
+    /// f32). For consumers that quantise values far more coarsely than
+    /// that. Subexpressions without such powers are shared with `self`.
+    pub fn with_neighbour_powers_shared(&self) -> Expr {
+        // Bases compared by structure (equal subexpressions built apart
+        // are one node of a graph).
+        let graph = std::cell::RefCell::new(crate::graph::Graph::new());
+        let key = |e: &Expr| graph.borrow_mut().add(e);
+        let real = |e: &Expr| e.as_const().filter(|c| c.is_finite() && c.fract() != 0.0);
+        // The real exponents of each base.
+        let mut powers: HashMap<crate::graph::NodeId, Vec<f64>> = HashMap::new();
+        self.rewrite(|cur, _| {
+            if let ExprNode::Binary(BinaryOp::Pow, a, b) = cur.node() {
+                if let Some(e) = real(b) {
+                    powers.entry(key(a)).or_default().push(e);
+                }
+            }
+            cur.clone()
+        });
+        self.rewrite(|cur, m| match cur.node() {
+            ExprNode::Binary(BinaryOp::Pow, a, b)
+                if real(b).is_some_and(|e| {
+                    powers
+                        .get(&key(a))
+                        .is_some_and(|es| es.iter().any(|&f| f - 1.0 == e))
+                }) =>
+            {
+                // The exponent e + 1 as the other power has it (e itself
+                // may be its f64 difference with 1).
+                let e = real(b).unwrap_or(0.0);
+                let f = powers
+                    .get(&key(a))
+                    .and_then(|es| es.iter().copied().find(|&f| f - 1.0 == e))
+                    .unwrap_or(e + 1.0);
+                let x = m(a);
+                let (at_zero, at_inf) = (0f64.powf(e), f64::INFINITY.powf(e));
+                Expr::select(
+                    x.eq_(0.0),
+                    Expr::constant(at_zero),
+                    Expr::select(
+                        x.abs().eq_(f64::INFINITY),
+                        Expr::constant(at_inf),
+                        x.pow(f) / &x,
+                    ),
+                )
+            }
+            _ if cur.children().iter().all(|&c| Arc::ptr_eq(&m(c).0, &c.0)) => cur.clone(),
+            _ => cur.with_children(m),
+        })
+    }
+
     /// Rebuilds the graph bottom-up: `f` gets each distinct node (children
     /// first) and the rebuilt form of any of its children, and returns the
     /// node's rebuilt form. An iterative post-order walk: generated models

@@ -23,6 +23,7 @@ pub mod frep;
 pub mod geom;
 pub mod graph;
 pub mod interval;
+mod merge;
 pub mod noise;
 pub mod ops;
 pub mod shape;

@@ -27,6 +27,17 @@ use crate::tape::{Op, Tape, ValueId};
 pub enum Simplify {
     /// Only those that keep every value bit for bit.
     Exact,
+    /// [`Simplify::Exact`] and identities that keep every output bit for
+    /// bit too, once branches are cut: `x * 1`, `1 * x`, `x / 1`, `x - 0`,
+    /// `x + (-0)` are `x`; `select(c, a, a)` is `a`; and a sum or
+    /// difference `a + z`, `z + a`, `a - z` with `z` proven to be a signed
+    /// zero (a product or quotient of a zero with a value the region
+    /// bounds away from infinity, such as a gradient term whose branch
+    /// was cut) is `a` where the region bounds `a` away from zero (as the
+    /// branch cuts, this trusts the bounds to hold the f32 values, with
+    /// wide margins against underflow and overflow). For consumers that
+    /// evaluate one shortened tape per region (the attribute layers).
+    Folded,
     /// Also sign-preserving ones above output 0 (its sign and zero set
     /// are kept; other outputs stay exact).
     Sign,
@@ -56,10 +67,22 @@ impl Tape {
         };
         // Where each old value now comes from (an old value id).
         let mut alias: Vec<ValueId> = (0..n as ValueId).collect();
+        // Values proven to be a signed zero (only with Folded).
+        let mut zero = vec![false; n];
+        let fold = mode == Simplify::Folded;
         let mut cut = false;
         for (i, op) in ops.iter().enumerate() {
             let pick = |v: ValueId| alias[v as usize];
             let iv = |v: ValueId| intervals[v as usize];
+            if fold {
+                let (to, z) = fold_identity(ops, op, &alias, &zero, intervals);
+                zero[i] = z;
+                if let Some(t) = to {
+                    alias[i] = t;
+                    cut = true;
+                    continue;
+                }
+            }
             let to = match *op {
                 Op::Binary(BinaryOp::Min, a, b) if clean(&iv(a)) && clean(&iv(b)) => {
                     if iv(a).hi < iv(b).lo {
@@ -142,8 +165,67 @@ impl Tape {
     }
 }
 
+/// Bounds far from f32 overflow (and from f32 underflow for
+/// [`nonzero`]): a product of a finite f32 with a zero is a zero, and a
+/// value bounded away from zero by this much is not rounded to zero.
+const FINITE: f64 = 1e30;
+const TINY: f64 = 1e-30;
+
+fn finite(i: &Interval) -> bool {
+    clean(i) && i.lo > -FINITE && i.hi < FINITE
+}
+
+fn nonzero(i: &Interval) -> bool {
+    clean(i) && (i.lo > TINY || i.hi < -TINY)
+}
+
+/// The identity folds of [`Simplify::Folded`] for `op` (operands read
+/// through `alias`): the old value `op` equals, if any, and whether `op`
+/// is proven to be a signed zero.
+fn fold_identity(
+    ops: &[Op],
+    op: &Op,
+    alias: &[ValueId],
+    zero: &[bool],
+    intervals: &[Interval],
+) -> (Option<ValueId>, bool) {
+    let pick = |v: ValueId| alias[v as usize];
+    let konst = |v: ValueId| match ops[pick(v) as usize] {
+        Op::Const(c) => Some(c),
+        _ => None,
+    };
+    let one = |v: ValueId| konst(v).is_some_and(|c| c == 1.0);
+    // A zero constant of either sign, or a value proven zero.
+    let is_zero = |v: ValueId| zero[pick(v) as usize] || konst(v) == Some(0.0);
+    let is_const = |v: ValueId, bits: u64| konst(v).is_some_and(|c| c.to_bits() == bits);
+    let iv = |v: ValueId| intervals[v as usize];
+    match *op {
+        Op::Binary(BinaryOp::Mul, a, b) if one(b) => (Some(pick(a)), false),
+        Op::Binary(BinaryOp::Mul, a, b) if one(a) => (Some(pick(b)), false),
+        Op::Binary(BinaryOp::Div, a, b) if one(b) => (Some(pick(a)), false),
+        Op::Binary(BinaryOp::Mul, a, b) => (
+            None,
+            (is_zero(a) && finite(&iv(b))) || (is_zero(b) && finite(&iv(a))),
+        ),
+        Op::Binary(BinaryOp::Div, a, b) => (None, is_zero(a) && nonzero(&iv(b))),
+        // x - (+0) and x + (-0) are x for every x, -0 included.
+        Op::Binary(BinaryOp::Sub, a, b) if is_const(b, 0f64.to_bits()) => (Some(pick(a)), false),
+        Op::Binary(BinaryOp::Add, a, b) if is_const(b, (-0f64).to_bits()) => (Some(pick(a)), false),
+        Op::Binary(BinaryOp::Add, a, b) if is_const(a, (-0f64).to_bits()) => (Some(pick(b)), false),
+        // a + z and a - z are a when a is not a zero itself.
+        Op::Binary(BinaryOp::Add | BinaryOp::Sub, a, b) if is_zero(b) && nonzero(&iv(a)) => {
+            (Some(pick(a)), false)
+        }
+        Op::Binary(BinaryOp::Add, a, b) if is_zero(a) && nonzero(&iv(b)) => (Some(pick(b)), false),
+        Op::Select(_, a, b) if pick(a) == pick(b) => (Some(pick(a)), false),
+        Op::Select(_, a, b) => (None, is_zero(a) && is_zero(b)),
+        Op::Unary(crate::ops::UnaryOp::Neg | crate::ops::UnaryOp::Square, a) => (None, is_zero(a)),
+        _ => (None, false),
+    }
+}
+
 /// `op` with its operands replaced through `f`.
-fn map_operands(op: &Op, f: impl Fn(ValueId) -> ValueId) -> Op {
+pub(crate) fn map_operands(op: &Op, f: impl Fn(ValueId) -> ValueId) -> Op {
     match *op {
         Op::Var(_) | Op::Const(_) | Op::Param(_) => *op,
         Op::Unary(u, a) => Op::Unary(u, f(a)),
@@ -248,6 +330,84 @@ mod tests {
             ];
             assert_eq!(a.eval(p).to_bits(), b.eval(p).to_bits());
         }
+    }
+
+    /// The gradient of max(a, b) written out (the derivative of each side
+    /// times a select of 1 or 0, as symbolic differentiation writes it):
+    /// where the region decides the max, Folded drops the products with 1,
+    /// the products with the other side's 0 and their sums, leaving a
+    /// shorter tape than Exact, with the same bits in f32 and f64.
+    #[test]
+    fn folds_of_decided_derivatives_keep_the_bits() {
+        let [x, y, z] = Expr::xyz();
+        let a = (&x - 0.3).square() + y.square() * 2.0 + 1.0;
+        let b = (&y * 1.7).sin() * &z + 0.5;
+        let pick = a.ge(&b);
+        let one = Expr::constant(1.0);
+        let zero = Expr::constant(0.0);
+        let sa = Expr::select(pick.clone(), one.clone(), zero.clone());
+        let sb = Expr::select(pick, zero, one);
+        let ga = [2.0 * (&x - 0.3), 4.0 * &y, Expr::constant(0.0) * &x];
+        let gb = [
+            Expr::constant(0.0) * &x,
+            1.7 * (&y * 1.7).cos() * &z,
+            (&y * 1.7).sin(),
+        ];
+        let grad: Vec<Expr> = (0..3).map(|k| &ga[k] * &sa + &gb[k] * &sb).collect();
+        let e = (grad[0].square() + grad[1].square() + grad[2].square()).sqrt();
+        let t = Tape::new(&e);
+        // a >= 1 + ... > b there: a's side only.
+        let (lo, hi) = ([0.5, 0.2, -0.4], [0.9, 0.6, 0.4]);
+        let iv = region(&t, lo, hi);
+        let exact = t.simplify(&iv, Simplify::Exact).unwrap();
+        let folded = t.simplify(&iv, Simplify::Folded).unwrap();
+        assert!(
+            folded.len() + 8 < exact.len(),
+            "{} vs {}",
+            folded.len(),
+            exact.len()
+        );
+        let (mut pt, mut pf) = (PointEval::new(&t), PointEval::new(&folded));
+        let (mut bt, mut bf) = (BatchEval::new(&t), BatchEval::new(&folded));
+        for k in 0..500 {
+            let f = |m: usize, d: usize| lo[d] + (hi[d] - lo[d]) * ((k * m) % 499) as f64 / 498.0;
+            let p = [f(7, 0), f(13, 1), f(29, 2)];
+            assert_eq!(pt.eval(p).to_bits(), pf.eval(p).to_bits(), "{p:?}");
+            let (px, py, pz) = ([p[0] as f32], [p[1] as f32], [p[2] as f32]);
+            let (mut u, mut v) = ([0f32], [0f32]);
+            bt.eval(&px, &py, &pz, &mut u);
+            bf.eval(&px, &py, &pz, &mut v);
+            assert_eq!(u[0].to_bits(), v[0].to_bits(), "{p:?}");
+        }
+    }
+
+    /// A zero product is added away only to a value bounded away from
+    /// zero (-0 + +0 is +0, not -0), and only when the factor is bounded
+    /// (0 times infinity is NaN); x * 1 and x - 0 fold always.
+    #[test]
+    fn zero_sums_fold_only_where_the_bits_are_kept() {
+        let [x, y, _] = Expr::xyz();
+        let zero = Expr::constant(0.0);
+        let t = Tape::new(&(&x + &zero * &y));
+        // x straddles 0 here: x + 0 y is +0 where x = -0.
+        let iv = region(&t, [-1.0, 1.0, 0.0], [1.0, 2.0, 0.0]);
+        assert!(t.simplify(&iv, Simplify::Folded).is_none());
+        // x positive: x alone (nothing computed).
+        let iv = region(&t, [0.5, 1.0, 0.0], [1.0, 2.0, 0.0]);
+        assert!(t.simplify(&iv, Simplify::Folded).unwrap().is_empty());
+        // 0 / y with y reaching 0 may be NaN: kept.
+        let t = Tape::new(&(&x + &zero / &y));
+        let iv = region(&t, [0.5, -1.0, 0.0], [1.0, 1.0, 0.0]);
+        assert!(t.simplify(&iv, Simplify::Folded).is_none());
+        // Selects the region decides leave x * 1 / 1 - 0: x.
+        let c = Expr::constant;
+        let big = y.gt(5.0);
+        let e = &x * Expr::select(big.clone(), c(2.0), c(1.0));
+        let e = e / Expr::select(big.clone(), c(3.0), c(1.0)) - Expr::select(big, c(4.0), c(0.0));
+        let t = Tape::new(&e);
+        let iv = region(&t, [-1.0, -1.0, 0.0], [1.0, 1.0, 0.0]);
+        assert_eq!(t.simplify(&iv, Simplify::Exact).unwrap().len(), 3);
+        assert!(t.simplify(&iv, Simplify::Folded).unwrap().is_empty());
     }
 
     #[test]

@@ -236,3 +236,146 @@ fn integer_powers_keep_values() {
         }
     }
 }
+
+/// Divisions by constants become products with the inverse: none is left
+/// (except by constants without a normal f32 inverse), powers of two give
+/// the same bits, others agree within an ulp or two in f32 and f64 (also
+/// at zero, infinite and NaN numerators), and parts without divisions are
+/// shared.
+#[test]
+fn constant_divisors_are_inverted() {
+    use microfrep_core::BatchEval;
+    let [x, y, z] = Expr::xyz();
+    let plain = x.square() + &y;
+    let e = (&x / 3.0 + &y / 0.25) / 7.5 - (&z / 0.1).sin() / &y + &plain / 1e-39 + &x / 1e39;
+    let r = e.with_constant_divisors_inverted();
+    let divs = |t: &Tape| t.listing().matches(" div ").count();
+    let (te, tr) = (Tape::new(&e), Tape::new(&r));
+    assert_eq!(divs(&te), 7, "{}", te.listing());
+    // The division by y and those by 1e-39 and 1e39 (inverses not normal
+    // in f32) stay.
+    assert_eq!(divs(&tr), 3, "{}", tr.listing());
+    assert!(std::ptr::eq(
+        plain.with_constant_divisors_inverted().node(),
+        plain.node()
+    ));
+    let quarter = (&x / 0.25).with_constant_divisors_inverted();
+    let (mut a, mut b) = (PointEval::new(&te), PointEval::new(&tr));
+    let (mut ba, mut bb) = (BatchEval::new(&te), BatchEval::new(&tr));
+    let mut bq = (
+        BatchEval::new(&Tape::new(&(&x / 0.25))),
+        BatchEval::new(&Tape::new(&quarter)),
+    );
+    for &px in &[-2.0, -0.0, 0.0, 0.3, 1.7, 1e30, f64::INFINITY, f64::NAN] {
+        for &py in &[0.5, -3.0] {
+            for &pz in &[0.05, -0.4] {
+                let (u, v) = (a.eval([px, py, pz]), b.eval([px, py, pz]));
+                let close = |u: f64, v: f64, tol: f64| {
+                    u == v || (u - v).abs() <= tol * u.abs() || (u.is_nan() && v.is_nan())
+                };
+                assert!(close(u, v, 1e-15), "f64 at ({px}, {py}, {pz}): {u} vs {v}");
+                let (p, q, w) = ([px as f32], [py as f32], [pz as f32]);
+                let (mut fu, mut fv) = ([0f32], [0f32]);
+                ba.eval(&p, &q, &w, &mut fu);
+                bb.eval(&p, &q, &w, &mut fv);
+                assert!(
+                    close(fu[0] as f64, fv[0] as f64, 5e-7),
+                    "f32 at ({px}, {py}, {pz}): {} vs {}",
+                    fu[0],
+                    fv[0]
+                );
+                bq.0.eval(&p, &q, &w, &mut fu);
+                bq.1.eval(&p, &q, &w, &mut fv);
+                assert!(fu[0].to_bits() == fv[0].to_bits() || fu[0].is_nan() && fv[0].is_nan());
+            }
+        }
+    }
+}
+
+/// A power and the power with the exponent one less, as differentiating
+/// writes them, share one power: `pow(x, e - 1)` becomes `pow(x, e) / x`,
+/// with the same values at signed zeros, infinities, negative bases and
+/// NaN, and within a few ulps elsewhere; powers without such a neighbour
+/// (or with a whole exponent) stay.
+#[test]
+fn neighbour_powers_share_one_power() {
+    use microfrep_core::BatchEval;
+    let [x, y, _] = Expr::xyz();
+    let s = x.square() + &y;
+    let u = s.pow(0.2);
+    let [du, _, _] = u.gradient();
+    let lone = (&y + 3.0).pow(1.7) + (&y + 3.0).pow(0.35);
+    let e = &u + &du * 0.3 + &lone;
+    let r = e.with_neighbour_powers_shared();
+    let pows = |t: &Tape| t.listing().matches(" pow ").count();
+    let (te, tr) = (Tape::new(&e), Tape::new(&r));
+    assert_eq!(pows(&te), 4, "{}", te.listing());
+    assert_eq!(pows(&tr), 3, "{}", tr.listing());
+    assert!(std::ptr::eq(
+        lone.with_neighbour_powers_shared().node(),
+        lone.node()
+    ));
+    // The power on its own: x^(0.2 - 1) next to x^0.2.
+    let pair = [x.pow(0.2), x.pow(0.2 - 1.0)];
+    let shared: Vec<Expr> = {
+        let both = (&pair[0] + &pair[1]).with_neighbour_powers_shared();
+        let ExprNode::Binary(_, a, b) = both.node() else {
+            panic!("a sum")
+        };
+        vec![a.clone(), b.clone()]
+    };
+    let (t1, t2) = (Tape::new(&pair[1]), Tape::new(&shared[1]));
+    let (mut p1, mut p2) = (PointEval::new(&t1), PointEval::new(&t2));
+    let (mut b1, mut b2) = (BatchEval::new(&t1), BatchEval::new(&t2));
+    let bases = [
+        -2.0,
+        -0.0,
+        0.0,
+        1e-30,
+        0.37,
+        1.0,
+        2.5,
+        1e30,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+    ];
+    for &bx in &bases {
+        let (u, v) = (p1.eval([bx, 0.0, 0.0]), p2.eval([bx, 0.0, 0.0]));
+        let special = bx == 0.0 || bx.is_infinite() || bx.is_nan() || bx < 0.0;
+        if special {
+            assert!(
+                u == v || (u.is_nan() && v.is_nan()),
+                "f64 at {bx}: {u} vs {v}"
+            );
+        } else {
+            assert!((u - v).abs() <= 1e-13 * u.abs(), "f64 at {bx}: {u} vs {v}");
+        }
+        let (mut fu, mut fv) = ([0f32], [0f32]);
+        b1.eval(&[bx as f32], &[0.0], &[0.0], &mut fu);
+        b2.eval(&[bx as f32], &[0.0], &[0.0], &mut fv);
+        let (fu, fv) = (fu[0], fv[0]);
+        if special {
+            assert!(
+                fu == fv || (fu.is_nan() && fv.is_nan()),
+                "f32 at {bx}: {fu} vs {fv}"
+            );
+        } else {
+            // Both round the exponents to f32 (which alone moves tiny and
+            // huge bases' powers by more than an ulp): the shared form is
+            // as close to the exact power as the original, within 2 ulps.
+            let exact = (bx as f32 as f64).powf(0.2 - 1.0);
+            let (du, dv) = ((fu as f64 - exact).abs(), (fv as f64 - exact).abs());
+            assert!(
+                dv <= du + 2.4e-7 * exact,
+                "f32 at {bx}: {fu} vs {fv} ({exact})"
+            );
+        }
+    }
+    // And the whole expression at a few points.
+    let (mut a, mut b) = (PointEval::new(&te), PointEval::new(&tr));
+    for p in [[0.3, 0.2, 0.0], [1.5, -0.4, 0.0], [-2.0, 7.0, 0.0]] {
+        let (u, v) = (a.eval(p), b.eval(p));
+        assert!((u - v).abs() <= 1e-14 * u.abs(), "at {p:?}: {u} vs {v}");
+    }
+}

@@ -17,8 +17,11 @@ use std::sync::{Arc, Mutex};
 /// 8-bit grey layers of attribute channel `channel` (0-based index into
 /// [`Shape::attributes`]).
 ///
-/// The channel is compiled alone, once per stack, and cut to the branches
-/// each layer needs. Bands of rows are sampled for the shape's value (as
+/// The channel is compiled alone, once per stack (with the costly
+/// operations of a select's two branches, such as the two powers of a
+/// gain, run once on the picked operand: the same bits), and cut to the
+/// branches each layer needs, with the identities the cuts leave (`x * 1`,
+/// zero terms of decided derivatives) folded away. Bands of rows are sampled for the shape's value (as
 /// [`rasterize`] samples it) and graded at once, in parallel. Only pixels
 /// inside the solid are evaluated: tiles with no inside pixel are skipped,
 /// tiles whose interval bounds give one grey level (with a margin far wider
@@ -30,8 +33,10 @@ use std::sync::{Arc, Mutex};
 /// are bounded only now and then on its other bands. Every grey level is
 /// the one f32 evaluation of the whole channel at the pixel centre gives
 /// (with its real powers of whole exponents evaluated as integer powers,
-/// which moves a level only where the exact value is within a few f32
-/// roundings of a half level).
+/// a power next to one with the exponent one more as their quotient by
+/// the base, and its divisions by constants as products with their
+/// inverses, which moves a level only where the exact value is within a
+/// few f32 roundings of a half level).
 #[derive(Clone, Debug)]
 pub struct AttributeStack {
     /// The channel.
@@ -90,20 +95,35 @@ impl Payoff {
     fn paid(self) -> bool {
         self.tries < 2 || 4 * self.gained >= BOUND_PIXELS * self.spent
     }
+
+    /// Bound one tile in this many: every one where bounding paid, one in
+    /// 16 where it saved too little, one in 64 where it saved nothing at
+    /// all (a long channel whose bounds decide nothing: each costs as much
+    /// as sampling hundreds of pixels).
+    fn stride(self) -> u32 {
+        if self.paid() {
+            1
+        } else if self.gained == 0 {
+            64
+        } else {
+            16
+        }
+    }
 }
 
 /// Which tile sizes a band bounds, and what bounding them gave.
 struct Policy {
-    /// Per [`Payoff::level`]: bound every tile (else every 16th).
-    bound: [bool; 3],
+    /// Per [`Payoff::level`]: bound one tile in this many
+    /// ([`Payoff::stride`]).
+    stride: [u32; 3],
     skipped: Cell<[u32; 3]>,
     seen: Cell<[Payoff; 3]>,
 }
 
 impl Policy {
-    fn new(bound: [bool; 3]) -> Policy {
+    fn new(stride: [u32; 3]) -> Policy {
         Policy {
-            bound,
+            stride,
             skipped: Cell::new([0; 3]),
             seen: Cell::new([Payoff::default(); 3]),
         }
@@ -111,13 +131,13 @@ impl Policy {
 
     /// Whether to bound the next tile of `level`.
     fn worth(&self, level: usize) -> bool {
-        if self.bound[level] {
+        if self.stride[level] <= 1 {
             return true;
         }
         let mut s = self.skipped.get();
         s[level] += 1;
         self.skipped.set(s);
-        s[level] % 16 == 0
+        s[level].is_multiple_of(self.stride[level])
     }
 
     /// A tile of `level` bounded with a tape of `cost`, saving `gained`
@@ -148,7 +168,11 @@ struct Evals {
 }
 
 impl Evals {
-    fn new(tape: &Tape) -> Evals {
+    /// Evaluators of `tape` for points at height `z` (set in every lane
+    /// once: the batch evaluator never writes its inputs).
+    fn new(tape: &Tape, z: f32) -> Evals {
+        let mut batch = BatchEval::new(tape);
+        batch.coords_mut().2.fill(z);
         Evals {
             tape: tape.clone(),
             cost: tape_cost(tape),
@@ -156,7 +180,7 @@ impl Evals {
                 use microfrep_core::{BinaryOp as B, Op};
                 matches!(op, Op::Binary(B::Min | B::Max, ..) | Op::Select(..))
             }),
-            batch: BatchEval::new(tape),
+            batch,
             interval: IntervalEval::new(tape),
             idx: Box::new([0; BLOCK]),
             n: 0,
@@ -196,11 +220,26 @@ fn same_tape(a: &Tape, b: &Tape) -> bool {
 
 /// The channel's expression as the stack evaluates it: real powers with
 /// whole exponents as integer powers (a few multiplications instead of the
-/// exp/ln kernels: a few f32 roundings, far below the half level of 1/510
-/// that could move a level, so within one level of the exact value as
-/// before).
+/// exp/ln kernels), a real power next to the power of the same base with
+/// the exponent one more (a gradient's) as the quotient of that power and
+/// the base (one power kernel instead of two), and divisions by constants
+/// as products with their inverses (a multiplication instead of a
+/// division): a few f32 roundings, far below the half level of 1/510 that
+/// could move a level, so within one level of the exact value as before.
 fn channel_expr(shape: &Shape, channel: usize) -> microfrep_core::Expr {
-    shape.attributes()[channel].expr.with_integer_powers()
+    shape.attributes()[channel]
+        .expr
+        .with_integer_powers()
+        .with_neighbour_powers_shared()
+        .with_constant_divisors_inverted()
+}
+
+/// The channel's tape as the stack evaluates it: [`channel_expr`] with the
+/// costly operations of both branches of a select evaluated once
+/// ([`Tape::merge_branches`]: the same bits at every point).
+fn channel_tape(shape: &Shape, channel: usize) -> Tape {
+    let t = Tape::new(&channel_expr(shape, channel));
+    t.merge_branches().unwrap_or(t)
 }
 
 /// Rough cost per point of evaluating `t` in batches, in units of one
@@ -259,6 +298,8 @@ const CACHED_TAPES: usize = 8;
 struct Worker<'a> {
     evals: Vec<Evals>,
     known: &'a Known,
+    /// The layer's height, in f32.
+    z: f32,
 }
 
 impl Worker<'_> {
@@ -267,7 +308,7 @@ impl Worker<'_> {
         if let Some(e) = (1..self.evals.len()).find(|&e| same_tape(&self.evals[e].tape, &t)) {
             return e;
         }
-        self.evals.push(Evals::new(&self.known.get(t)));
+        self.evals.push(Evals::new(&self.known.get(t), self.z));
         self.evals.len() - 1
     }
 
@@ -334,7 +375,7 @@ impl AttributeStack {
         }
         Ok(AttributeStack {
             channel,
-            tape: Tape::new(&channel_expr(shape, channel)),
+            tape: channel_tape(shape, channel),
             known: Arc::default(),
         })
     }
@@ -380,7 +421,7 @@ impl AttributeStack {
                 Interval::with_f32_ends(grid.y(0), grid.y(ny - 1)),
                 Interval::with_f32_ends(z, z),
             );
-            match self.tape.simplify(iv.values(), Simplify::Exact) {
+            match self.tape.simplify(iv.values(), Simplify::Folded) {
                 Some(t) => self.known.get(t),
                 None => self.tape.clone(),
             }
@@ -388,21 +429,22 @@ impl AttributeStack {
         let tiles = nx.div_ceil(TILE);
         let init = || {
             let w = Worker {
-                evals: vec![Evals::new(&tape)],
+                evals: vec![Evals::new(&tape, z as f32)],
                 known: &self.known,
+                z: z as f32,
             };
             (BandRaster::new(shape), w, Vec::new())
         };
         // Each band is sampled (the shape's value, as `rasterize` samples
         // it) and then graded while its values are in cache.
         type State<'a> = (BandRaster, Worker<'a>, Vec<f32>);
-        let band = |(raster, w, values): &mut State<'_>, (j0, rows): (usize, &mut [u8]), bound| {
+        let band = |(raster, w, values): &mut State<'_>, (j0, rows): (usize, &mut [u8]), stride| {
             let h = rows.len() / nx;
             values.resize(h * nx, 0.0);
             raster.band(grid, z, j0, values);
             let band = Band {
                 grid,
-                policy: Policy::new(bound),
+                policy: Policy::new(stride),
                 z,
                 xs: &xs,
                 j0,
@@ -429,20 +471,20 @@ impl AttributeStack {
         let (mut seen, mut solid) = ([Payoff::default(); 3], 0);
         let mut state = init();
         for b in rest.by_ref() {
-            let (s, n) = band(&mut state, b, [true; 3]);
+            let (s, n) = band(&mut state, b, [1; 3]);
             seen = std::array::from_fn(|l| seen[l].add(s[l]));
             solid += n;
             if seen[0].tries + seen[1].tries >= 2 {
                 break;
             }
         }
-        let bound = seen.map(Payoff::paid);
+        let stride = seen.map(Payoff::stride);
         solid += rest
             .collect::<Vec<_>>()
             .into_par_iter()
-            .map_init(init, |s, b| band(s, b, bound).1)
+            .map_init(init, |s, b| band(s, b, stride).1)
             .sum::<u64>();
-        (pixels, bound, solid)
+        (pixels, seen.map(Payoff::paid), solid)
     }
 }
 
@@ -544,7 +586,7 @@ impl Band<'_> {
         if big && ev.branches {
             let short = ev
                 .tape
-                .simplify(ev.interval.values(), Simplify::Exact)
+                .simplify(ev.interval.values(), Simplify::Folded)
                 .map(|t| (tape_cost(&t), t))
                 .filter(|(c, _)| 10 * c < 8 * ev.cost);
             let saved = short.as_ref().map_or(0, |(c, _)| ev.cost - c);
@@ -585,7 +627,6 @@ impl Band<'_> {
             return;
         }
         let ev = &mut w.evals[e];
-        let zf = self.z as f32;
         let cols = at[0]..at[0] + size[0];
         for j in at[1]..at[1] + size[1] {
             let mut m = self.inside(j, &cols);
@@ -600,15 +641,22 @@ impl Band<'_> {
             let r = self.row(j) + cols.start;
             let xs = &self.xs[cols.clone()];
             let n = ev.n;
-            let (x, y, zz) = ev.batch.coords_mut();
+            let (x, y, _) = ev.batch.coords_mut();
             y[n..n + count].fill(yf);
-            zz[n..n + count].fill(zf);
             let (x, idx) = (&mut x[n..n + count], &mut ev.idx[n..n + count]);
-            for (xq, iq) in x.iter_mut().zip(idx) {
-                let k = m.trailing_zeros() as usize;
-                *xq = xs[k];
-                *iq = r + k;
-                m &= m - 1;
+            if count == xs.len() {
+                // The whole row of the leaf: no bits to walk.
+                x.copy_from_slice(xs);
+                for (k, iq) in idx.iter_mut().enumerate() {
+                    *iq = r + k;
+                }
+            } else {
+                for (xq, iq) in x.iter_mut().zip(idx) {
+                    let k = m.trailing_zeros() as usize;
+                    *xq = xs[k];
+                    *iq = r + k;
+                    m &= m - 1;
+                }
             }
             ev.n = n + count;
         }
@@ -650,8 +698,9 @@ fn tile_mask(vals: &[f32; TILE]) -> u64 {
 }
 
 /// The grey levels of layer `k` the straightforward way, for tests: the
-/// shape's value and the channel as the stack evaluates it (with integer
-/// powers) compiled together, evaluated at every pixel centre.
+/// shape's value and the channel as the stack evaluates it (its integer
+/// powers, shared powers and inverted constant divisors) compiled
+/// together, evaluated at every pixel centre.
 #[doc(hidden)]
 pub fn reference_layer_pixels(
     shape: &Shape,
@@ -754,8 +803,9 @@ mod tests {
         let root = Tape::new(&(&x * 0.0 + 0.25));
         let known = Known::default();
         let mut w = Worker {
-            evals: vec![Evals::new(&root)],
+            evals: vec![Evals::new(&root, 0.0)],
             known: &known,
+            z: 0.0,
         };
         let mut rows = vec![0u8; (tapes.len() + 1) * BLOCK];
         let mut want = vec![0u8; rows.len()];
@@ -814,6 +864,26 @@ mod tests {
         assert_eq!(bound[..2], [false; 2]);
         assert_eq!(solid, fast.iter().filter(|&&v| v > 0).count() as u64);
         assert_eq!(fast, reference_layer_pixels(&shape, &grid, k, 0));
+    }
+
+    /// Bounding a tile size is kept for every tile while the probes tell
+    /// nothing or it paid, one in 16 where it saved too little, one in 64
+    /// where it saved nothing; and a band bounds just those tiles.
+    #[test]
+    fn strides_follow_what_bounding_saved() {
+        use super::{Payoff, Policy, BOUND_PIXELS};
+        let p = |tries, spent, gained| Payoff {
+            tries,
+            spent,
+            gained,
+        };
+        assert_eq!(p(1, 500, 0).stride(), 1);
+        assert_eq!(p(4, 100, 100 * BOUND_PIXELS / 4).stride(), 1);
+        assert_eq!(p(4, 100, 100).stride(), 16);
+        assert_eq!(p(4, 100, 0).stride(), 64);
+        let policy = Policy::new([1, 16, 64]);
+        let count = |level| (0..256).filter(|_| policy.worth(level)).count();
+        assert_eq!((count(0), count(1), count(2)), (256, 16, 4));
     }
 
     /// The vectorisable level equals `round(255 clamp(s, 0, 1))` with a

@@ -15,9 +15,13 @@ use microfrep_fab::{rasterize, AttributeStack, SliceGrid};
 /// x < -0.5, Schlick's gain of the radius (two powers, one of which tiles
 /// away from the middle radius cut: a shorter tape by cost, not by steps),
 /// steps of powers switched on along x (tiles keep different sets, so
-/// many shorter tapes are in use at once), and powers with whole exponents
+/// many shorter tapes are in use at once), powers with whole exponents
 /// (odd of negative bases, negative), which the stack evaluates as integer
-/// powers.
+/// powers, divisions by constants, which it evaluates as products with the
+/// inverses, a power with its gradient (whose power with the exponent one
+/// less the stack shares with it), and a ramp over the normalised depth of
+/// a union of two ellipsoids (a gradient written out, with the derivative
+/// of the max as selects of 1 and 0 that tiles decide).
 fn graded_ball() -> Shape {
     let [x, y, z] = Expr::xyz();
     let r2 = x.square() + y.square() + z.square();
@@ -46,6 +50,18 @@ fn graded_ball() -> Shape {
         .with_attribute("s3", s3)
         .with_attribute("gain", gain)
         .with_attribute("steps", steps)
+        .with_attribute("ratio", (&x / 0.3 + &y / 7.0) / 3.0 + 0.5 + &z / 0.25)
+        .with_attribute("power_gradient", {
+            let s = (x.square() + 2.0 * y.square() + 0.05).pow(0.3);
+            0.2 + 0.5 * &s + 0.04 * &s.gradient()[0]
+        })
+        .with_attribute("depth", {
+            let e1 = 1.0 - (x.square() / 0.8 + y.square() / 0.5 + z.square());
+            let e2 = 1.0 - ((&x - 0.3).square() * 4.0 + y.square() / 0.9 + z.square() / 0.7);
+            let depth = microfrep_core::frep::normalize(&e1.max(&e2));
+            let ramp = ((&depth - 0.1) / 0.2).max(0.0).min(1.0).pow(0.7);
+            Expr::select(depth.ge(0.1), ramp, Expr::constant(0.0))
+        })
         .with_attribute(
             "whole",
             0.5 + 0.6 * (&x - 0.2).pow(3.0) - 0.3 * (&y + 0.1).pow(4.0)
@@ -58,7 +74,7 @@ fn culled_attribute_layers_equal_full_evaluation() {
     let shape = graded_ball();
     let grid = SliceGrid::new([-1.05; 3], [1.05; 3], 0.07, 0.011).unwrap();
     assert!(grid.nx > 150 && grid.layers > 20);
-    for channel in 0..6 {
+    for channel in 0..9 {
         let stack = AttributeStack::new(&shape, channel).unwrap();
         let attr = Tape::new(&shape.attributes()[channel].expr);
         let mut point = PointEval::new(&attr);
@@ -101,9 +117,9 @@ fn culled_attribute_layers_equal_full_evaluation() {
 #[test]
 fn attribute_stack_refuses_missing_channel() {
     let shape = graded_ball();
-    let e = AttributeStack::new(&shape, 6).unwrap_err().to_string();
+    let e = AttributeStack::new(&shape, 9).unwrap_err().to_string();
     assert!(
-        e.contains("attribute 7 does not exist") && e.contains("6 attribute"),
+        e.contains("attribute 10 does not exist") && e.contains("9 attribute"),
         "{e}"
     );
 }

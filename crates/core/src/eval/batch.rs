@@ -410,21 +410,26 @@ fn binary(op: BinaryOp, o: &mut Lanes, a: impl Src, b: impl Src) {
 }
 
 fn powi(o: &mut Lanes, a: &Lanes, n: i32) {
-    let m = n.unsigned_abs();
-    map1(o, a, |v| {
-        // Square-and-multiply with a loop count fixed by n, so it vectorises.
-        let mut base = v;
-        let mut acc = 1.0f32;
-        let mut e = m;
-        while e > 0 {
-            if e & 1 == 1 {
-                acc *= base;
+    // Square-and-multiply over the bits of |n|, each step one loop over
+    // the lanes (the loop over the bits inside a lane's closure stayed
+    // scalar): per lane the same products in the same order, `acc` from
+    // 1 times the set bits' powers of `a`, as the per-lane form.
+    let mut e = n.unsigned_abs();
+    let mut base = *a;
+    o.fill(1.0);
+    while e > 0 {
+        if e & 1 == 1 {
+            for (acc, &b) in o.iter_mut().zip(&base) {
+                *acc *= b;
             }
-            base *= base;
-            e >>= 1;
         }
-        acc
-    });
+        e >>= 1;
+        if e > 0 {
+            for b in base.iter_mut() {
+                *b *= *b;
+            }
+        }
+    }
     if n < 0 {
         for v in o.iter_mut() {
             *v = 1.0 / *v;
@@ -629,5 +634,68 @@ mod tests {
         assert!(out.iter().all(|&v| v == 2.5));
         ev.eval_output(1, &x, &y, &z, &mut out);
         assert_eq!(out, y);
+    }
+
+    /// Integer powers give, bit for bit, the per-lane square-and-multiply
+    /// (1 times the set bits' powers, the base squared after each bit;
+    /// then the reciprocal for negative exponents) for every exponent in
+    /// -16..=16 and bases of every kind: signed zeros, subnormals, huge
+    /// values that overflow, infinities, NaN.
+    #[test]
+    fn integer_powers_are_the_per_lane_products() {
+        let per_lane = |v: f32, n: i32| {
+            let (mut base, mut acc, mut e) = (v, 1.0f32, n.unsigned_abs());
+            while e > 0 {
+                if e & 1 == 1 {
+                    acc *= base;
+                }
+                base *= base;
+                e >>= 1;
+            }
+            if n < 0 {
+                1.0 / acc
+            } else {
+                acc
+            }
+        };
+        let mut xs: Vec<f32> = (0..super::BLOCK as i32 + 37)
+            .map(|k| (k - 150) as f32 * 0.0173 + 1e-3 * (k % 7) as f32)
+            .collect();
+        xs.extend([
+            0.0,
+            -0.0,
+            1e-40,
+            -3e-39,
+            f32::MIN_POSITIVE,
+            1e20,
+            -3e15,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1.0,
+            -1.0,
+        ]);
+        let zeros = vec![0f32; xs.len()];
+        let mut out = vec![0f32; xs.len()];
+        for n in -16..=16 {
+            let tape = Tape::new(&Expr::x().powi(n));
+            assert!(
+                n.abs() < 3
+                    || tape
+                        .ops()
+                        .iter()
+                        .any(|op| matches!(op, crate::Op::PowI(..))),
+                "n = {n}"
+            );
+            BatchEval::new(&tape).eval(&xs, &zeros, &zeros, &mut out);
+            for (&x, &got) in xs.iter().zip(&out) {
+                let want = per_lane(x, n);
+                assert!(
+                    got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                    "{x:e}^{n}: {got:e} vs {want:e}"
+                );
+            }
+        }
     }
 }
