@@ -58,20 +58,23 @@ pub fn run() -> Result<(), String> {
     for (n, depth) in [(128usize, 7u8), (256, 8)] {
         // Marching cubes (the default cell method); marching tetrahedra is
         // timed too, for reference.
-        let mut opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], n);
-        opts.cells = CellMethod::Tetrahedra;
-        let tets_s = {
-            let t = Instant::now();
+        // One microfrep mesh with options `o`: the mesh, wall and CPU time
+        // (the shape compiled inside, as `microfrep mesh` does).
+        let mesh_ours = |o: &MeshOptions| -> Result<(Mesh, f64, f64), String> {
+            let (t, c) = (Instant::now(), cpu_seconds());
             let m = ours.install(|| {
-                Plan::new(&microfrep_core::Shape::from(&expr), &opts)
+                Plan::new(&microfrep_core::Shape::from(&expr), o)
                     .and_then(|p| p.run(&|_| {}))
                     .map_err(|e| e.to_string())
             })?;
-            let s = t.elapsed().as_secs_f64();
-            drop(m);
-            s
+            Ok((m, t.elapsed().as_secs_f64(), cpu_seconds() - c))
         };
+        let mut opts = MeshOptions::new([[-1.0; 3], [1.0; 3]], n);
+        opts.cells = CellMethod::Tetrahedra;
+        let tets_s = mesh_ours(&opts)?.1;
         opts.cells = CellMethod::Cubes;
+        let mut nocorr = opts.clone();
+        nocorr.volume_correction = false;
         let shape = Shape::<JitFunction>::new(&ctx, root).map_err(|e| e.to_string())?;
         let bound: BoundShape<JitFunction, f32> = shape.try_into().map_err(|e| format!("{e:?}"))?;
         let settings = fidget::mesh::Settings {
@@ -88,27 +91,11 @@ pub fn run() -> Result<(), String> {
         let mut kept = None;
         for _ in 0..REPS {
             drop(kept.take());
-            let (t, c) = (Instant::now(), cpu_seconds());
-            let m = ours.install(|| {
-                Plan::new(&microfrep_core::Shape::from(&expr), &opts)
-                    .and_then(|p| p.run(&|_| {}))
-                    .map_err(|e| e.to_string())
-            })?;
-            ours_t.push(t.elapsed().as_secs_f64());
-            ours_c.push(cpu_seconds() - c);
+            let (m, t, c) = mesh_ours(&opts)?;
+            ours_t.push(t);
+            ours_c.push(c);
             // The same without the volume correction (its cost).
-            {
-                let mut o = opts.clone();
-                o.volume_correction = false;
-                let t = Instant::now();
-                let m = ours.install(|| {
-                    Plan::new(&microfrep_core::Shape::from(&expr), &o)
-                        .and_then(|p| p.run(&|_| {}))
-                        .map_err(|e| e.to_string())
-                })?;
-                nocorr_t.push(t.elapsed().as_secs_f64());
-                drop(m);
-            }
+            nocorr_t.push(mesh_ours(&nocorr)?.1);
             // fidget meshes its default region [-1, 1]^3, the block's bounds.
             let (t, c) = (Instant::now(), cpu_seconds());
             let fm = fidget::mesh::Octree::build(&bound, &settings)
