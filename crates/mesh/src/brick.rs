@@ -1,6 +1,7 @@
 //! Meshing one surface brick: dense f32 sampling of its nodes, a table of
 //! triangles per cell sign pattern, refinement of the vertices it owns.
 
+use crate::check::BrickEdges;
 use crate::classify::{proven_sign, unproven_cells, BrickClass};
 use crate::correct::{accumulate, apply_all, Acc};
 use crate::grid::Grid;
@@ -38,6 +39,9 @@ pub struct BrickMesh {
     pub tris: Vec<[u32; 3]>,
     /// See [`unproven_cells`]; counted only in bricks with no surface.
     pub thin_cells: usize,
+    /// The brick's edges for an edge census, when asked for
+    /// ([`Scratch::new`]); the shared uses in the numbering of `tris`.
+    pub edges: Option<BrickEdges>,
 }
 
 /// Per-thread buffers, reused from brick to brick.
@@ -72,6 +76,10 @@ pub struct Scratch {
     acc: Vec<Acc>,
     tris: Vec<[u32; 3]>,
     finish: Finish,
+    /// Sort each brick's edges for a census ([`BrickMesh::edges`]).
+    count_edges: bool,
+    /// Whether each local vertex lies in a face plane of the brick.
+    face: Vec<bool>,
 }
 
 /// How a brick's vertices are finished: the grid's cell size, the volume
@@ -85,9 +93,19 @@ pub struct Finish {
 }
 
 impl Scratch {
-    pub fn new(tape: &Tape, brick: usize, simplify: bool, finish: Finish) -> Self {
+    /// Buffers for bricks of `brick` cells; `count_edges`: sort each
+    /// brick's edges for a census ([`BrickMesh::edges`]).
+    pub fn new(
+        tape: &Tape,
+        brick: usize,
+        simplify: bool,
+        finish: Finish,
+        count_edges: bool,
+    ) -> Self {
         let nodes = (brick + 1).pow(3);
         Scratch {
+            count_edges,
+            face: Vec::new(),
             tape: tape.clone(),
             simplify,
             finish,
@@ -222,6 +240,7 @@ pub fn mesh_brick(
     s.edge_of.clear();
     s.full_edges.clear();
     s.full_edge_of.clear();
+    s.face.clear();
     let mut owned = 0u32;
     let mut foreign = 0u32;
     // Edges are at least a cell long, and their ends lie within the
@@ -258,6 +277,7 @@ pub fn mesh_brick(
         // them too (its foreign vertices): both do it on the full tape, so
         // both get the same bits.
         let in_face = (0..3).any(|a| (ln[a] == 0 || ln[a] + 1 == n[a]) && dir >> a & 1 == 0);
+        s.face.push(in_face);
         let at = if (0..3).all(|a| ln[a] + 1 < n[a] || last[a]) {
             s.remap[vi] = owned;
             // Only vertices on the lower faces can be wanted by other bricks.
@@ -308,6 +328,13 @@ pub fn mesh_brick(
         s.pos[to_local(at) as usize] = p;
     }
     out.owned_keys.sort_unstable();
+    if s.count_edges {
+        let mut e = BrickEdges::of(&s.tris, &s.face);
+        for u in &mut e.shared {
+            *u = u.map(|v| s.remap[v as usize]);
+        }
+        out.edges = Some(e);
+    }
     out.tris = s
         .tris
         .iter()
@@ -473,6 +500,85 @@ mod tests {
     use super::*;
     use crate::{MeshOptions, Plan};
 
+    /// What [`BrickEdges`] relies on: for any signs at the corners of two
+    /// adjacent cells, in both cell tables, every segment inside either
+    /// cell or on the face between them is used once each way. (Every edge
+    /// of a brick with an end off its face planes is such a segment, of two
+    /// cells of the brick.) Exhaustive: 4096 patterns per axis.
+    #[test]
+    fn own_edges_of_any_two_cells_are_closed() {
+        use std::collections::HashMap;
+        for (name, table) in [
+            ("cubes", crate::cubes::cell_table()),
+            ("tets", crate::tets::cell_table()),
+        ] {
+            for axis in 0..3 {
+                // Nodes of the two cells: 3 along `axis`, 2 across.
+                let n: [usize; 3] = std::array::from_fn(|a| if a == axis { 3 } else { 2 });
+                let node = |p: [usize; 3]| p[0] + n[0] * (p[1] + n[1] * p[2]);
+                let mut checked = 0;
+                for signs in 0u32..1 << 12 {
+                    // Directed uses of (grid edge, grid edge), grid edges as
+                    // (start node, direction), and each use's cell.
+                    let mut uses: HashMap<([usize; 4], [usize; 4]), u32> = HashMap::new();
+                    let mut of_cell = Vec::new();
+                    for cell in 0..2 {
+                        let origin: [usize; 3] =
+                            std::array::from_fn(|a| (a == axis) as usize * cell);
+                        let corner = |c: usize| -> [usize; 3] {
+                            std::array::from_fn(|a| origin[a] + (c >> a & 1))
+                        };
+                        let mask = (0..8).fold(0, |m, c| m | ((signs >> node(corner(c)) & 1) << c));
+                        let range = table.start[mask as usize] as usize
+                            ..table.start[mask as usize + 1] as usize;
+                        let key = |e: u8| {
+                            let p = corner(e as usize >> 3);
+                            [p[0], p[1], p[2], e as usize & 7]
+                        };
+                        for t in &table.tris[range] {
+                            for i in 0..3 {
+                                let (a, b) = (key(t[i]), key(t[(i + 1) % 3]));
+                                *uses.entry((a, b)).or_default() += 1;
+                                of_cell.push((a, b, origin));
+                            }
+                        }
+                    }
+                    // The faces of the cell at `origin` that contain grid
+                    // edge `e` (as (axis, cell-relative side)).
+                    let faces = |e: [usize; 4], origin: [usize; 3]| -> Vec<(usize, usize)> {
+                        (0..3)
+                            .filter(|&a| e[3] >> a & 1 == 0)
+                            .map(|a| (a, e[a] - origin[a]))
+                            .collect()
+                    };
+                    for &(a, b, origin) in &of_cell {
+                        let common: Vec<_> = faces(a, origin)
+                            .into_iter()
+                            .filter(|f| faces(b, origin).contains(f))
+                            .collect();
+                        // Inside the cell, or on the face between the cells.
+                        let between =
+                            |&(fa, side): &(usize, usize)| fa == axis && origin[axis] + side == 1;
+                        if common.is_empty() || common.iter().any(between) {
+                            let there = uses[&(a, b)];
+                            let back = uses.get(&(b, a)).copied().unwrap_or(0);
+                            assert_eq!(
+                                (there, back),
+                                (1, 1),
+                                "{name}, axis {axis}, signs {signs:012b}: edge {a:?} - {b:?}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+                assert!(
+                    checked > 10_000,
+                    "{name}, axis {axis}: {checked} uses checked"
+                );
+            }
+        }
+    }
+
     /// A brick computes the positions of its foreign vertices itself (for
     /// the volume correction of its triangles); they must be the owner's
     /// bits, also where either brick sampled on a shortened tape.
@@ -488,7 +594,7 @@ mod tests {
             lo: [-1.1; 3],
             hi: [1.1; 3],
         };
-        let mut s = Scratch::new(&plan.tape, plan.grid.brick, true, finish);
+        let mut s = Scratch::new(&plan.tape, plan.grid.brick, true, finish, false);
         let meshes: Vec<BrickMesh> = (0..plan.grid.brick_count())
             .map(|k| {
                 if plan.classes[k] != BrickClass::Surface {

@@ -9,9 +9,10 @@
 //! STL and PLY are streamed to disk when the mesh would not fit (or when
 //! asked), after a check of the free disk. Otherwise an STL is still
 //! encoded, measured and sent to the disk while the mesh is made, its
-//! edges counted meanwhile ([`crate::check::EdgeCensus`]): the same bytes
-//! and figures as meshing into memory first, in little more than the
-//! meshing's time. After meshing, and before the
+//! edges counted meanwhile ([`crate::check::EdgeCensus`], from the bricks'
+//! own edges and the stitched ones, [`crate::check::BrickEdges`]): the
+//! same bytes and figures as meshing into memory first, in little more
+//! than the meshing's time. After meshing, and before the
 //! output appears, the mesh is refused when it is empty (with the reason)
 //! or when it lost more volume than [`JobOptions::max_volume_loss`] against
 //! the model's own sampled volume ([`crate::sampled`]): features thinner

@@ -17,9 +17,10 @@
 //! made at once, whatever the group size, and the same on every run.
 
 use crate::brick::{mesh_brick, BrickMesh, Finish, Scratch};
+use crate::check::BrickEdges;
 use crate::classify::BrickClass;
 use crate::correct::{add, apply_all, Acc};
-use crate::sink::{MeshSink, VertexWindow};
+use crate::sink::{Counted, MeshSink, VertexWindow};
 use crate::{MeshError, Plan};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -37,6 +38,9 @@ struct Work {
     foreign: Vec<(u32, u32)>,
     /// The brick's triangles, in global vertex indices after stage A.
     tris: Vec<[u32; 3]>,
+    /// The brick's edges for the sink's census, if it takes one (global
+    /// after stage A).
+    edges: Option<BrickEdges>,
 }
 
 /// A scratch lent from a pipeline's pool, given back when dropped.
@@ -132,10 +136,13 @@ impl Plan {
     }
 
     /// Meshes bricks `range` (whole slabs), numbering owned vertices from
-    /// `*next_vertex` on.
+    /// `*next_vertex` on; `count_edges`: bricks sort their edges for the
+    /// sink's census.
+    #[allow(clippy::too_many_arguments)]
     fn mesh_group(
         &self,
         range: std::ops::Range<usize>,
+        count_edges: bool,
         next_vertex: &mut u64,
         done: &AtomicUsize,
         scratch: &Mutex<Vec<Scratch>>,
@@ -156,7 +163,13 @@ impl Plan {
             let s = scratch.lock().ok().and_then(|mut p| p.pop());
             Lent {
                 s: Some(s.unwrap_or_else(|| {
-                    Scratch::new(&self.tape, self.grid.brick, self.simplify, finish)
+                    Scratch::new(
+                        &self.tape,
+                        self.grid.brick,
+                        self.simplify,
+                        finish,
+                        count_edges,
+                    )
                 })),
                 pool: scratch,
             }
@@ -194,6 +207,7 @@ impl Plan {
                 inbound: vec![[0; 5]; m.owned_keys.len()],
                 // Still in the brick's local numbering until stage A.
                 tris: std::mem::take(&mut m.tris),
+                edges: m.edges.take(),
                 ..Work::default()
             })
             .collect();
@@ -246,6 +260,11 @@ impl Plan {
                 // fault per 340 triangles); a table lookup, not a branch.
                 for t in w.tris.iter_mut() {
                     *t = t.map(|v| globals[v as usize]);
+                }
+                if let Some(e) = w.edges.as_mut() {
+                    for u in e.shared.iter_mut() {
+                        *u = u.map(|v| globals[v as usize]);
+                    }
                 }
                 Ok(())
             },
@@ -315,7 +334,13 @@ fn emit_triangles(
         ],
     };
     for w in g.work {
-        sink.take_triangles(w.tris, &window)?;
+        match w.edges {
+            Some(edges) => {
+                let tris = w.tris;
+                sink.take_counted(Counted { tris, edges }, &window)?
+            }
+            None => sink.take_triangles(w.tris, &window)?,
+        }
     }
     Ok(())
 }
@@ -335,6 +360,7 @@ pub fn run(
     let total = grid.brick_count();
     let done = AtomicUsize::new(0);
     let scratch = Mutex::new(Vec::new());
+    let count_edges = sink.counts_edges();
     let mut next_vertex = 0u64;
     let mut starts = (0..total).step_by(per_group);
     let mut mesh_next = || -> Result<Option<Group>, MeshError> {
@@ -342,6 +368,7 @@ pub fn run(
             Some(s) => plan
                 .mesh_group(
                     s..(s + per_group).min(total),
+                    count_edges,
                     &mut next_vertex,
                     &done,
                     &scratch,

@@ -2,6 +2,7 @@
 //! final global order, a part at a time, so a mesh can be collected in
 //! memory or written to disk as it is made.
 
+use crate::check::BrickEdges;
 use crate::{Mesh, MeshError};
 
 /// The vertices a batch of triangles may use: two consecutive runs of the
@@ -39,6 +40,27 @@ pub trait MeshSink {
     fn take_triangles(&mut self, t: Vec<[u32; 3]>, window: &VertexWindow) -> Result<(), MeshError> {
         self.triangles(&t, window)
     }
+    /// Whether the sink takes an edge census
+    /// ([`crate::check::EdgeCensus`]). If so, the pipeline has every brick
+    /// sort its edges while it meshes ([`BrickEdges`]) and hands them over
+    /// with its triangles ([`Self::take_counted`]).
+    fn counts_edges(&self) -> bool {
+        false
+    }
+    /// [`Self::take_triangles`] for a sink that [`Self::counts_edges`]: one
+    /// brick's triangles with its edges. By default the edges are ignored.
+    fn take_counted(&mut self, part: Counted, window: &VertexWindow) -> Result<(), MeshError> {
+        self.take_triangles(part.tris, window)
+    }
+}
+
+/// One brick's triangles and its edges ([`MeshSink::take_counted`]), in
+/// global vertex indices.
+pub struct Counted {
+    /// The triangles.
+    pub tris: Vec<[u32; 3]>,
+    /// Their edges, for the census.
+    pub edges: BrickEdges,
 }
 
 /// Collects the whole mesh in memory: the parts as they arrive (the
@@ -181,6 +203,15 @@ impl MeshSink for Counting<'_> {
     fn take_triangles(&mut self, t: Vec<[u32; 3]>, window: &VertexWindow) -> Result<(), MeshError> {
         self.census.triangles(&t);
         self.inner.take_triangles(t, window)
+    }
+
+    fn counts_edges(&self) -> bool {
+        true
+    }
+
+    fn take_counted(&mut self, part: Counted, window: &VertexWindow) -> Result<(), MeshError> {
+        self.census.brick(&part.edges);
+        self.inner.take_triangles(part.tris, window)
     }
 }
 

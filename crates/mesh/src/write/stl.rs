@@ -6,7 +6,7 @@
 
 use super::{MeshFormat, CHUNK};
 use crate::check::EdgeCensus;
-use crate::sink::{MeshSink, VertexWindow};
+use crate::sink::{Counted, MeshSink, VertexWindow};
 use crate::{Mesh, MeshError};
 use microfrep_io::{AtomicFile, OutputFormat};
 use rayon::prelude::*;
@@ -232,6 +232,21 @@ impl MeshSink for StlJob<'_> {
             self.catch_up(false).map_err(MeshError::Stream)?;
         }
         Ok(())
+    }
+
+    fn counts_edges(&self) -> bool {
+        true
+    }
+
+    fn take_counted(&mut self, part: Counted, window: &VertexWindow) -> Result<(), MeshError> {
+        // In order: any triangles the census has not seen, then this
+        // brick's edges.
+        if self.counted < self.waiting.len() {
+            self.census.triangles(&self.waiting[self.counted..]);
+        }
+        self.census.brick(&part.edges);
+        self.counted = self.waiting.len() + part.tris.len();
+        self.triangles(&part.tris, window)
     }
 }
 
