@@ -6,7 +6,8 @@
 //! model's interval may reach `>= 0`, until a level would hold too many
 //! boxes; the hull of what is left is searched again from itself; then each
 //! face of that box is pushed inwards by bisection on the thickness of the
-//! slab next to it that subdivision proves empty. Set operations are nodes
+//! slab next to it that subdivision proves empty (a slab where a probe
+//! point is solid is settled without it). Set operations are nodes
 //! of the tape with exact interval rules ([`crate::Interval::set`]), so a
 //! lattice cut by a part is bounded by the part.
 //!
@@ -17,7 +18,7 @@
 //! cube is an error that asks for explicit bounds. The count, not the
 //! clock, decides, so the same model always gets the same box.
 
-use crate::{Interval, IntervalEval, Tape};
+use crate::{Interval, IntervalEval, PointEval, Tape};
 use std::sync::Arc;
 
 /// Half side of the cube searched first.
@@ -27,10 +28,13 @@ const MAX_BOXES: usize = 1 << 12;
 /// Most octree levels.
 const MAX_DEPTH: usize = 40;
 /// Bisection steps per face and rounds over the six faces.
-const FACE_STEPS: usize = 10;
+const FACE_STEPS: usize = 9;
 const ROUNDS: usize = 2;
 /// Interval evaluations allowed for proving one slab empty.
 const SLAB_EVALS: usize = 16384;
+/// Undecided boxes of a slab also probed at a point (see
+/// [`proven_empty`]).
+const SLAB_PROBES: usize = 64;
 
 /// An axis-aligned box, `min` to `max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,7 +107,7 @@ pub struct BoundsOptions {
 }
 
 impl Default for BoundsOptions {
-    /// A budget of 1.2e8 interval operations: about half a second on one core.
+    /// A budget of 1.2e8 interval operations: about a second on one core.
     fn default() -> Self {
         BoundsOptions {
             budget: 120_000_000,
@@ -123,9 +127,10 @@ impl std::fmt::Debug for BoundsOptions {
 
 type Box3 = [[f64; 3]; 2];
 
-/// Interval evaluation of output 0 with the work counted.
+/// Interval (and point) evaluation of output 0 with the work counted.
 struct Search<'o> {
     ev: IntervalEval,
+    point: PointEval,
     cost: u64,
     spent: u64,
     opts: &'o BoundsOptions,
@@ -152,12 +157,19 @@ impl Search<'_> {
         let r = self.ev.eval(iv(0), iv(1), iv(2));
         r.is_nan() || r.hi >= 0.0
     }
+
+    /// Whether the model is solid at `p` (counted as one evaluation).
+    fn solid_at(&mut self, p: [f64; 3]) -> bool {
+        self.spent += self.cost;
+        self.point.eval(p) >= 0.0
+    }
 }
 
 /// The box of output 0 of `tape` (see the module docs).
 pub(crate) fn find(tape: &Tape, opts: &BoundsOptions) -> Result<Bounds, BoundsError> {
     let mut s = Search {
         ev: IntervalEval::new(tape),
+        point: PointEval::new(tape),
         cost: tape.len().max(1) as u64,
         spent: 0,
         opts,
@@ -294,7 +306,9 @@ fn shrink_faces(s: &mut Search, mut b: Box3) -> Box3 {
                     } else {
                         slab[0][a] = b[1][a] - mid * ext;
                     }
-                    if proven_empty(s, slab) {
+                    // The slab's face towards the rest of the box.
+                    let inner = (a, slab[1 - side][a]);
+                    if proven_empty(s, slab, inner) {
                         lo = mid;
                     } else {
                         hi = mid;
@@ -311,18 +325,45 @@ fn shrink_faces(s: &mut Search, mut b: Box3) -> Box3 {
     b
 }
 
-/// Whether the model is negative on all of `b`, by halving the longest side
-/// of undecided boxes until the intervals tell or [`SLAB_EVALS`] boxes have
-/// been evaluated.
-fn proven_empty(s: &mut Search, b: Box3) -> bool {
-    let mut stack = vec![b];
+/// Whether the model is negative on all of slab `b`, by halving the longest
+/// side of undecided boxes until the intervals tell or [`SLAB_EVALS`] boxes
+/// have been evaluated. `inner` is the slab's face towards the rest of the
+/// box (axis, coordinate): where solid in the slab most likely is, joined
+/// to the rest of the part. The first [`SLAB_PROBES`] undecided boxes are
+/// taken breadth first, so they spread over the slab, and each is probed
+/// at a point (the middle of its side on `inner`, or its centre): one that
+/// is solid settles it at once. Without the probes the search would spend
+/// its whole allowance to find that out (on a dense structure, at every
+/// bisection step of every face: 1 s for a gyroid sheet in a cube, 30 ms
+/// with them). Then depth first, to keep the list short; the boxes
+/// evaluated are the same either way when the slab is proven empty.
+fn proven_empty(s: &mut Search, b: Box3, inner: (usize, f64)) -> bool {
+    let mut boxes = std::collections::VecDeque::from([b]);
     let mut left = SLAB_EVALS;
-    while let Some(b) = stack.pop() {
+    let mut probes = SLAB_PROBES;
+    loop {
+        let next = if probes > 0 {
+            boxes.pop_front()
+        } else {
+            boxes.pop_back()
+        };
+        let Some(b) = next else { break };
         if !s.may_hold(&b) {
             continue;
         }
         if left == 0 || s.exhausted() {
             return false;
+        }
+        if probes > 0 {
+            probes -= 1;
+            let (axis, at) = inner;
+            let mut p: [f64; 3] = std::array::from_fn(|k| 0.5 * (b[0][k] + b[1][k]));
+            if b[0][axis] == at || b[1][axis] == at {
+                p[axis] = at;
+            }
+            if s.solid_at(p) {
+                return false;
+            }
         }
         left -= 1;
         let a = (0..3)
@@ -332,8 +373,8 @@ fn proven_empty(s: &mut Search, b: Box3) -> bool {
         let (mut l, mut h) = (b, b);
         l[1][a] = mid;
         h[0][a] = mid;
-        stack.push(h);
-        stack.push(l);
+        boxes.push_back(h);
+        boxes.push_back(l);
     }
     true
 }
