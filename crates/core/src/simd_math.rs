@@ -153,10 +153,10 @@ fn fma(a: f64, b: f64, c: f64) -> f64 {
 fn clamp_exponent(z: f64) -> f64 {
     let z = if z < -300.0 { -300.0 } else { z };
     let z = if z > 300.0 { 300.0 } else { z };
-    if z == z {
-        z
-    } else {
+    if z.is_nan() {
         0.0
+    } else {
+        z
     }
 }
 
