@@ -181,7 +181,10 @@ pub fn mesh_to_file(
         kept = mesh;
     }
     let (tape, grid) = Plan::frame(shape, &opts)?;
-    let est = memory::estimate_grid(&tape, &grid, opts.cells);
+    let mut est = memory::estimate_grid(&tape, &grid, opts.cells);
+    if job.colour.is_some() {
+        est = memory::with_colours(&est);
+    }
     let too_big = |bytes: f64| avail.is_some_and(|m| bytes > m);
     let stream = format.streams() && (job.stream || too_big(est.bytes));
     let predicted = if stream {

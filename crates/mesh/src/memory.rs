@@ -101,6 +101,20 @@ pub fn estimate_grid(tape: &Tape, g: &Grid, method: CellMethod) -> Estimate {
     }
 }
 
+/// Bytes per vertex of colouring a mesh held in memory: the channel's f32
+/// value and the 3-byte colour of every vertex, rounded up.
+pub const COLOUR_BYTES_PER_VERT: f64 = 8.0;
+
+/// `e` for a mesh coloured in memory ([`crate::job::JobOptions::colour`]):
+/// its vertex colours added. (Streamed, the values go to a scratch file and
+/// colours are made a block at a time: no more memory.)
+pub fn with_colours(e: &Estimate) -> Estimate {
+    Estimate {
+        bytes: e.bytes + e.vertices * COLOUR_BYTES_PER_VERT,
+        ..*e
+    }
+}
+
 /// Bytes per triangle and per vertex held by the pipeline while it works:
 /// the brick's triangles and their global copy (12 + 12); per vertex its
 /// position, key, two correction sums and final copy (12 + 12 + 40 + 12;

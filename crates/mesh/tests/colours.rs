@@ -197,6 +197,42 @@ fn ply_obj_and_3mf_carry_the_attribute_colour_of_every_vertex() {
 }
 
 #[test]
+fn colours_held_in_memory_are_in_the_predicted_peak() {
+    let d = dir("peak");
+    let by = ColourBy {
+        channel: 0,
+        colormap: Colormap::Viridis,
+        range: None,
+    };
+    let shape = ball();
+    let (tape, grid) = microfrep_mesh::Plan::frame(&shape, &opts()).unwrap();
+    let est = microfrep_mesh::memory::estimate_grid(&tape, &grid, opts().cells);
+    let run = |j: &JobOptions, name: &str| {
+        mesh_to_file(&shape, &opts(), &d.join(name), j, &|_, _| {}).unwrap()
+    };
+    let plain = run(&JobOptions::default(), "plain.ply");
+    let coloured = run(&job(by.clone(), false), "coloured.ply");
+    let streamed = run(&job(by, true), "streamed.ply");
+    assert!(!plain.streamed && !coloured.streamed && streamed.streamed);
+    let extra = coloured.predicted_bytes - plain.predicted_bytes;
+    let want = microfrep_mesh::memory::COLOUR_BYTES_PER_VERT * est.vertices;
+    assert!(
+        want > 0.0 && (extra - want).abs() < 1e-6 * want,
+        "{extra} vs {want}"
+    );
+    // Streamed, the values wait in a scratch file: no more memory.
+    let plain_streamed = run(
+        &JobOptions {
+            stream: true,
+            ..JobOptions::default()
+        },
+        "plain_streamed.ply",
+    );
+    assert_eq!(streamed.predicted_bytes, plain_streamed.predicted_bytes);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
 fn streamed_coloured_ply_equals_the_in_memory_file() {
     let d = dir("stream");
     for range in [None, Some([-0.5, 0.5])] {
