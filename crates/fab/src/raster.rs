@@ -47,7 +47,15 @@ struct Evals {
     interval: IntervalEval,
     /// Whether tiles may switch to a tape shortened for their area.
     simplify: bool,
+    /// Evaluators of the shortened tapes used lately, newest last: tiles
+    /// far apart often decide the same branches, and making evaluators
+    /// (the batch plan's lowering) cost about 5 % of a layer when every
+    /// shortened tile made its own.
+    short: Vec<Evals>,
 }
+
+/// Shortened tapes whose evaluators a thread keeps.
+const KEPT_SHORT: usize = 8;
 
 impl Evals {
     fn new(tape: &Tape, simplify: bool) -> Evals {
@@ -56,7 +64,28 @@ impl Evals {
             batch: BatchEval::new(tape),
             interval: IntervalEval::new(tape),
             simplify,
+            short: Vec::new(),
         }
+    }
+
+    /// Evaluators of `t`, a shortening of this tape: kept ones if `t` is
+    /// the same tape as one of them, else new ones (give them back with
+    /// [`Evals::keep`]).
+    fn shortened(&mut self, t: Tape) -> Evals {
+        let same = |e: &Evals| e.tape.ops() == t.ops() && e.tape.outputs() == t.outputs();
+        match self.short.iter().position(same) {
+            Some(k) => self.short.remove(k),
+            None => Evals::new(&t, true),
+        }
+    }
+
+    /// Keeps `e` (from [`Evals::shortened`]) as the newest, dropping the
+    /// oldest beyond [`KEPT_SHORT`].
+    fn keep(&mut self, e: Evals) {
+        if self.short.len() == KEPT_SHORT {
+            self.short.remove(0);
+        }
+        self.short.push(e);
     }
 }
 
@@ -165,8 +194,10 @@ fn tile(
             .simplify(ev.interval.values(), Simplify::Sign)
             .filter(|t| 10 * t.len() < 8 * ev.tape.len());
         if let Some(t) = short {
-            let mut local = Evals::new(&t, true);
-            return tile(&mut local, grid, z, rows, at, size, row0);
+            let mut local = ev.shortened(t);
+            tile(&mut local, grid, z, rows, at, size, row0);
+            ev.keep(local);
+            return;
         }
     }
     if size[0] > LEAF || size[1] > LEAF {
