@@ -237,6 +237,23 @@ impl MeshSink for Tallying<'_> {
     }
 
     fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError> {
+        self.add(t, window);
+        self.inner.triangles(t, window)
+    }
+
+    fn counts_edges(&self) -> bool {
+        self.inner.counts_edges()
+    }
+
+    fn take_counted(&mut self, part: Counted, window: &VertexWindow) -> Result<(), MeshError> {
+        self.add(&part.tris, window);
+        self.inner.take_counted(part, window)
+    }
+}
+
+impl Tallying<'_> {
+    /// Counts and measures triangles `t`.
+    fn add(&mut self, t: &[[u32; 3]], window: &VertexWindow) {
         let (mut vol, mut area) = (0.0, 0.0);
         for tri in t {
             let (v, a) = volume_area_of(tri.map(|i| window.get(i)));
@@ -246,6 +263,5 @@ impl MeshSink for Tallying<'_> {
         self.tally.volume += vol;
         self.tally.area += area;
         self.tally.triangles += t.len() as u64;
-        self.inner.triangles(t, window)
     }
 }
