@@ -695,29 +695,10 @@ impl EdgeCensus {
         self.out_of_order |= e.own_uses % 2 == 1;
         self.edges += e.own_uses / 2;
         self.good += e.own_uses / 2;
-        if self.rows.is_empty() {
-            self.out_of_order |= !e.shared.is_empty();
-            return;
-        }
-        let mask = self.rows.len() - 1;
+        // A few percent of the uses: the careful path is quick enough.
         for &[p, q] in &e.shared {
             let (lo, hi, one) = if p < q { (p, q, UP) } else { (q, p, DOWN) };
-            if (lo as u64) < self.closed || hi as u64 >= self.next || hi - lo > 0xffff {
-                self.edge(lo, hi, one);
-                continue;
-            }
-            match add(
-                &mut self.rows[lo as usize & mask],
-                lo,
-                (hi - lo) as u16,
-                one,
-            ) {
-                Some((e, g)) => {
-                    self.edges += e;
-                    self.good = (self.good as i64 + g) as u64;
-                }
-                None => self.edge(lo, hi, one),
-            }
+            self.edge(lo, hi, one);
         }
     }
 
