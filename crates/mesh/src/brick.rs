@@ -277,7 +277,9 @@ pub fn mesh_brick(
         // them too (its foreign vertices): both do it on the full tape, so
         // both get the same bits.
         let in_face = (0..3).any(|a| (ln[a] == 0 || ln[a] + 1 == n[a]) && dir >> a & 1 == 0);
-        s.face.push(in_face);
+        if s.count_edges {
+            s.face.push(in_face);
+        }
         let at = if (0..3).all(|a| ln[a] + 1 < n[a] || last[a]) {
             s.remap[vi] = owned;
             // Only vertices on the lower faces can be wanted by other bricks.
