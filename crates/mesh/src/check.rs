@@ -1119,6 +1119,10 @@ mod tests {
                     // checked use by use.
                     assert!(b.shared > 0 && b.own > 2 * b.shared as u64, "{what}");
                     assert_eq!(b.own as usize + b.shared, 3 * b.mesh.triangles.len());
+                    // The in-memory mesh counted while it is made.
+                    let (m, e) = plan.run_counted(&|_| {}).unwrap();
+                    assert!(m == b.mesh, "{what}");
+                    assert_eq!(e, Some(want), "{what}");
                 }
             }
         }

@@ -263,9 +263,11 @@ pub fn mesh_to_file(
         let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
         summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
     } else {
-        let mesh = match kept {
-            Some(m) => m,
-            None => plan.run(&progress)?,
+        // Edges counted while meshing (from the bricks), except for a mesh
+        // the resolution search kept.
+        let (mesh, counted) = match kept {
+            Some(m) => (m, None),
+            None => plan.run_counted(&progress)?,
         };
         let colours = match &job.colour {
             Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
@@ -274,8 +276,8 @@ pub fn mesh_to_file(
         colour_scale = colours.as_ref().map(|c| c.scale);
         // The file is encoded first (all threads), then synced and put in
         // place, if the verdict passes, on a thread of its own (the sync
-        // waits on the disk) while the pool counts the edges; dropped, the
-        // file is removed. (Run side by side under `rayon::join`, the
+        // waits on the disk) while the pool counts the edges if the
+        // meshing could not; dropped, the file is removed. (Run side by side under `rayon::join`, the
         // encoder's ordered writes waited behind stolen census work.) The
         // verdict needs the volume: STL measures it while encoding (the
         // facet normals are the same products), other formats take a pass
@@ -304,7 +306,7 @@ pub fn mesh_to_file(
         let file = file?;
         let (committed, (edges, bad_edges)) = std::thread::scope(|sc| {
             let sync = sc.spawn(move || file.commit());
-            let e = crate::check::edges(&mesh);
+            let e = counted.unwrap_or_else(|| crate::check::edges(&mesh));
             (sync.join(), e)
         });
         committed.map_err(|_| MeshError::Internal("the file sync thread panicked".into()))??;

@@ -276,6 +276,18 @@ impl Plan {
         Ok(c.into_mesh())
     }
 
+    /// [`Self::run`], with the edges and bad edges counted while the mesh
+    /// is made (as [`check::edges`] counts them; `None` where the census
+    /// could not tell).
+    pub fn run_counted(
+        &self,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<(Mesh, Option<(usize, usize)>), MeshError> {
+        let mut c = sink::Collect::counting();
+        self.run_into(&mut c, progress)?;
+        Ok(c.into_counted())
+    }
+
     /// Meshes all surface bricks into `sink`, a few z-slabs of bricks at a
     /// time (so a sink that writes to disk keeps memory bounded); the
     /// output is the same as [`Self::run`]'s.

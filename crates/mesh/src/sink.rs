@@ -72,15 +72,34 @@ pub struct Counted {
 pub struct Collect {
     vertices: Vec<Vec<[f32; 3]>>,
     triangles: Vec<Vec<[u32; 3]>>,
+    /// The edge census, when taken ([`Collect::counting`]).
+    census: Option<crate::check::EdgeCensus>,
 }
 
 impl Collect {
+    /// A sink that also counts the edges as they come, from the bricks
+    /// ([`crate::check::EdgeCensus::brick`]); see [`Collect::into_counted`].
+    pub fn counting() -> Collect {
+        Collect {
+            census: Some(crate::check::EdgeCensus::new()),
+            ..Collect::default()
+        }
+    }
+
     /// The mesh received so far, in order.
     pub fn into_mesh(self) -> Mesh {
         Mesh {
             vertices: concat(self.vertices),
             triangles: concat(self.triangles),
         }
+    }
+
+    /// The mesh and, for a [`Collect::counting`] sink, its edges and bad
+    /// edges as [`crate::check::edges`] counts them (`None` where the
+    /// census could not tell: count them with that function).
+    pub fn into_counted(mut self) -> (Mesh, Option<(usize, usize)>) {
+        let edges = self.census.take().and_then(|c| c.finish());
+        (self.into_mesh(), edges)
     }
 }
 
@@ -108,22 +127,39 @@ fn concat<T: Copy + Default + Send + Sync>(mut parts: Vec<Vec<T>>) -> Vec<T> {
 
 impl MeshSink for Collect {
     fn vertices(&mut self, v: &[[f32; 3]]) -> Result<(), MeshError> {
+        if let Some(c) = &mut self.census {
+            c.vertices(v.len());
+        }
         if !v.is_empty() {
             self.vertices.push(v.to_vec());
         }
         Ok(())
     }
 
-    fn triangles(&mut self, t: &[[u32; 3]], _: &VertexWindow) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], window: &VertexWindow) -> Result<(), MeshError> {
+        self.take_triangles(t.to_vec(), window)
+    }
+
+    fn take_triangles(&mut self, t: Vec<[u32; 3]>, _: &VertexWindow) -> Result<(), MeshError> {
+        if let Some(c) = &mut self.census {
+            c.triangles(&t);
+        }
         if !t.is_empty() {
-            self.triangles.push(t.to_vec());
+            self.triangles.push(t);
         }
         Ok(())
     }
 
-    fn take_triangles(&mut self, t: Vec<[u32; 3]>, _: &VertexWindow) -> Result<(), MeshError> {
-        if !t.is_empty() {
-            self.triangles.push(t);
+    fn counts_edges(&self) -> bool {
+        self.census.is_some()
+    }
+
+    fn take_counted(&mut self, part: Counted, _: &VertexWindow) -> Result<(), MeshError> {
+        if let Some(c) = &mut self.census {
+            c.brick(&part.edges);
+        }
+        if !part.tris.is_empty() {
+            self.triangles.push(part.tris);
         }
         Ok(())
     }
