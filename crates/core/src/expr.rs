@@ -109,9 +109,22 @@ impl fmt::Debug for Expr {
     }
 }
 
+thread_local! {
+    /// Nodes created on this thread so far (see [`Expr::nodes_created`]).
+    static CREATED: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
 impl Expr {
     fn new(n: ExprNode) -> Expr {
+        CREATED.with(|c| c.set(c.get().wrapping_add(1)));
         Expr(Arc::new(n))
+    }
+    /// How many expression nodes this thread has created so far. A builder
+    /// that runs untrusted programs (HyperFun lowering) reads it before and
+    /// while it works, to refuse a model whose graph outgrows a budget
+    /// before the memory is spent, rather than after.
+    pub fn nodes_created() -> u64 {
+        CREATED.with(|c| c.get())
     }
     /// The node at the root of this expression.
     pub fn node(&self) -> &ExprNode {
@@ -674,38 +687,46 @@ impl std::ops::Neg for &Expr {
     }
 }
 
-// Dropping a long chain (a sum of 100k terms, 100k statements of HyperFun)
-// would recurse once per node and overflow the stack. Children that this
-// node owns alone and that have children themselves are moved into a
-// worklist (replaced by a shared leaf) and dropped one at a time, so the
-// recursion depth stays one. Shared children only lose a reference.
+// Dropping a long chain (a sum of 100k terms, 100k statements of HyperFun,
+// `e = e.min(&e)` a million times) would recurse once per node and overflow
+// the stack. Every child with children of its own is moved out of the node
+// being dropped (a shared leaf takes its place) into a worklist; an entry
+// of the worklist is only taken apart when it held the last reference
+// (`Arc::into_inner` decides that atomically), otherwise it just loses one
+// reference. So no drop ever recurses more than one level, whether a
+// subtree is owned once, shared with other nodes, or held twice by the
+// same node (`v + v`, whose second reference used to free it from inside
+// the parent's own drop).
 impl Drop for ExprNode {
     fn drop(&mut self) {
         let mut work = Vec::new();
-        self.take_owned_subtrees(&mut work);
-        while let Some(mut e) = work.pop() {
-            if let Some(node) = Arc::get_mut(&mut e.0) {
-                node.take_owned_subtrees(&mut work);
+        self.take_inner_children(&mut work);
+        while let Some(e) = work.pop() {
+            if let Some(mut node) = Arc::into_inner(e.0) {
+                node.take_inner_children(&mut work);
+                // `node` drops here with leaves only.
             }
         }
     }
 }
 
 impl ExprNode {
-    /// Moves every child that would drop a subtree along with this node into
-    /// `out`, leaving a shared leaf in its place.
-    fn take_owned_subtrees(&mut self, out: &mut Vec<Expr>) {
+    fn is_leaf(&self) -> bool {
+        matches!(
+            self,
+            ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. }
+        )
+    }
+
+    /// Moves every child that has children itself into `out`, leaving a
+    /// shared leaf in its place.
+    fn take_inner_children(&mut self, out: &mut Vec<Expr>) {
         fn take(e: &mut Expr, out: &mut Vec<Expr>) {
-            let Some(node) = Arc::get_mut(&mut e.0) else {
-                return;
-            };
-            let leaf = matches!(
-                node,
-                ExprNode::Var(_) | ExprNode::Const(_) | ExprNode::Param { .. }
-            );
-            if !leaf {
+            if !e.0.is_leaf() {
                 static PLACEHOLDER: std::sync::OnceLock<Expr> = std::sync::OnceLock::new();
-                let hole = PLACEHOLDER.get_or_init(|| Expr::constant(0.0)).clone();
+                let hole = PLACEHOLDER
+                    .get_or_init(|| Expr(Arc::new(ExprNode::Const(0.0))))
+                    .clone();
                 out.push(std::mem::replace(e, hole));
             }
         }

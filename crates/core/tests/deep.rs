@@ -157,3 +157,122 @@ proptest! {
         prop_assert_eq!(PointEval::new(&Tape::new(&shifted)).eval(p), got);
     }
 }
+
+/// How one level of a shared chain refers to the level below, `v`: every
+/// kind holds `v` at least twice, so the last reference to `v` goes away
+/// inside the drop of its parent.
+#[derive(Clone, Copy, Debug)]
+enum Twice {
+    Sum,
+    Min,
+    Select,
+    Set,
+    Blend,
+    PowOfItself,
+}
+
+fn twice() -> impl Strategy<Value = Twice> {
+    prop_oneof![
+        Just(Twice::Sum),
+        Just(Twice::Min),
+        Just(Twice::Select),
+        Just(Twice::Set),
+        Just(Twice::Blend),
+        Just(Twice::PowOfItself),
+    ]
+}
+
+/// A chain `n` levels deep where each level holds the one below twice (a
+/// DAG: as a tree it would have 2^n nodes).
+fn shared_chain(kinds: &[Twice], n: usize) -> Expr {
+    let alpha = Expr::param("alpha", 0.5);
+    let mut v = Expr::x();
+    for k in 0..n {
+        v = match kinds[k % kinds.len()] {
+            Twice::Sum => &v + &v,
+            Twice::Min => v.min(&v),
+            Twice::Select => Expr::select(Expr::y().gt(0.0), v.clone(), v.clone()),
+            Twice::Set => {
+                Expr::set(microfrep_core::SetOp::Union, &v, &v, alpha.clone())
+            }
+            Twice::Blend => Expr::blend(
+                microfrep_core::SetOp::Intersection,
+                [v.clone(), v.clone(), alpha.clone(), v.clone(), 1.0.into(), 1.0.into()],
+            ),
+            Twice::PowOfItself => v.pow(&v),
+        };
+    }
+    v
+}
+
+#[test]
+fn a_node_holding_its_child_twice_drops_without_recursing() {
+    // The class: `y = min(y, y)` 200k times in a HyperFun loop
+    // overflowed the stack when the model was dropped.
+    let mut v = Expr::x();
+    for _ in 0..N {
+        v = v.min(&v);
+    }
+    assert_eq!(v.node_count(), N + 1);
+    drop(v);
+    let mut s = Expr::x();
+    for _ in 0..N {
+        s = &s + &s;
+    }
+    // Still evaluable: 2^N overflows to infinity, the graph stays N nodes.
+    assert_eq!(PointEval::new(&Tape::new(&s)).eval([1.0, 0.0, 0.0]), f64::INFINITY);
+    drop(s);
+}
+
+#[test]
+fn shared_chains_dropped_from_many_threads_at_once() {
+    // Several threads drop their references to one DAG concurrently: the
+    // last one takes it apart, none recurses, nothing is freed twice.
+    let v = shared_chain(&[Twice::Sum, Twice::Select, Twice::Set], N);
+    let handles: Vec<_> = (0..4)
+        .map(|k| {
+            let mine = v.clone() + k as f64;
+            std::thread::Builder::new()
+                .stack_size(256 * 1024)
+                .spawn(move || drop(mine))
+                .expect("thread")
+        })
+        .collect();
+    drop(v);
+    for h in handles {
+        h.join().expect("a drop panicked");
+    }
+}
+
+#[test]
+fn nodes_created_counts_the_nodes_this_thread_builds() {
+    let before = Expr::nodes_created();
+    let x = Expr::x();
+    let e = &x + 1.0;
+    // x, the constant 1 and the sum.
+    assert_eq!(Expr::nodes_created() - before, 3);
+    drop(e);
+    // Another thread's nodes are its own.
+    std::thread::spawn(|| {
+        let _ = Expr::x() * 2.0;
+    })
+    .join()
+    .expect("thread");
+    assert_eq!(Expr::nodes_created() - before, 3);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
+
+    /// Random mixes of node kinds, each level holding the one below two or
+    /// three times, 50k to 150k levels: dropped on the 2 MiB test stack.
+    #[test]
+    fn random_shared_chains_drop_without_recursing(
+        kinds in prop::collection::vec(twice(), 1..6),
+        n in 50_000usize..150_000,
+    ) {
+        let v = shared_chain(&kinds, n);
+        prop_assert!(v.node_count() >= n);
+        drop(v);
+    }
+}
