@@ -94,6 +94,7 @@ pub struct MeshField {
     sign: Sign,
     topology: Topology,
     flipped: usize,
+    inverted: Option<f64>,
     self_intersecting: Option<bool>,
     bbox: [[f64; 3]; 2],
     diag: f64,
@@ -116,6 +117,20 @@ impl fmt::Debug for MeshField {
 
 /// Nodes a box's winding-number bound may visit before answering "either".
 const INTERVAL_BUDGET: usize = 4000;
+
+/// Points farther than this many box diagonals from the mesh's box are
+/// outside without a sign test (see [`MeshField::probe`]). At a million
+/// diagonals the squared distances of different triangles still differ by
+/// about 1e-10 of their size, far above f64 rounding, so the answer agrees
+/// with the sign test wherever that test is still reliable.
+const FAR_DIAGONALS: f64 = 1e6;
+
+/// A query located: its nearest triangle, or, far from the mesh, how far
+/// and in which direction (unit, from the mesh towards the point).
+enum Probe {
+    Near(Hit),
+    Far { distance: f64, direction: [f64; 3] },
+}
 
 impl MeshField {
     /// Builds with the default options and no progress report.
@@ -170,16 +185,28 @@ impl MeshField {
         let mut topology = mesh.topology();
         progress(t, total);
         let mut flipped = 0;
-        let repaired;
-        let mesh = if opts.orient && topology.inconsistent_edges > 0 {
+        let mut repaired = None;
+        if opts.orient && topology.inconsistent_edges > 0 {
             let mut m = mesh.clone();
             flipped = m.orient();
             topology = m.topology();
-            repaired = m;
-            &repaired
-        } else {
-            mesh
-        };
+            repaired = Some(m);
+        }
+        // A closed, coherently wound mesh whose normals point inwards has a
+        // negative volume; both sign rules would take its outside for its
+        // inside (the winding number is -1 in it), so it is turned over.
+        let mut inverted = None;
+        if opts.orient && topology.is_closed_and_oriented() {
+            let v = repaired.as_ref().unwrap_or(mesh).volume();
+            if v < 0.0 {
+                let m = repaired.get_or_insert_with(|| mesh.clone());
+                for t in &mut m.triangles {
+                    t.swap(1, 2);
+                }
+                inverted = Some(v);
+            }
+        }
+        let mesh = repaired.as_ref().unwrap_or(mesh);
         progress(2 * t, total);
         if opts.sign == SignMethod::PseudoNormal && !topology.is_watertight() {
             return Err(MeshError::NotWatertight(topology.warnings().join("; ")));
@@ -218,6 +245,7 @@ impl MeshField {
             sign,
             topology,
             flipped,
+            inverted,
             self_intersecting,
             bbox,
             diag: norm(sub(bbox[1], bbox[0])),
@@ -243,6 +271,12 @@ impl MeshField {
         self.flipped
     }
 
+    /// The (negative) volume of the mesh as given, when it was closed and
+    /// coherently wound but inside out, and so was turned over.
+    pub fn inverted(&self) -> Option<f64> {
+        self.inverted
+    }
+
     /// Whether triangles of the mesh cross each other: tested (through the
     /// BVH) only for watertight meshes under [`SignMethod::Auto`], where a
     /// crossing makes the build fall back to the winding number; `None`
@@ -266,26 +300,105 @@ impl MeshField {
         self.beta
     }
 
-    /// The closest point of the mesh to `p` (exact, f64).
-    pub fn closest(&self, p: [f64; 3]) -> Closest {
+    /// The closest point of the mesh to `p` (exact, f64); `None` when `p`
+    /// has a NaN or infinite coordinate, or is so far away that its squared
+    /// distance does not fit an f64 (beyond about 1e154).
+    pub fn closest(&self, p: [f64; 3]) -> Option<Closest> {
+        if p.iter().any(|c| !c.is_finite()) {
+            return None;
+        }
         let h = self.bvh.closest(p, Hit::NONE);
-        Closest {
+        if h.tri == u32::MAX || !h.d2.is_finite() {
+            return None;
+        }
+        Some(Closest {
             point: h.point,
             distance: h.d2.sqrt(),
             triangle: self.bvh.original[h.tri as usize] as usize,
             feature: h.feature,
+        })
+    }
+
+    /// Unsigned distance to the mesh (infinite at an infinite coordinate,
+    /// NaN at a NaN one).
+    pub fn distance(&self, p: [f64; 3]) -> f64 {
+        if p.iter().any(|c| c.is_nan()) {
+            return f64::NAN;
+        }
+        match self.probe(p, Hit::NONE) {
+            Probe::Near(h) => h.d2.sqrt(),
+            Probe::Far { distance, .. } => distance,
         }
     }
 
-    /// Unsigned distance to the mesh.
-    pub fn distance(&self, p: [f64; 3]) -> f64 {
-        self.bvh.closest(p, Hit::NONE).d2.sqrt()
+    /// Whether `p` is far enough from the mesh's box that it is outside
+    /// under either sign rule, measured as the largest per-axis excess over
+    /// the box (so that no square can overflow), with that excess vector.
+    fn far_excess(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+        let [lo, hi] = self.bbox;
+        let q: [f64; 3] = std::array::from_fn(|a| {
+            if p[a] < lo[a] {
+                p[a] - lo[a]
+            } else if p[a] > hi[a] {
+                p[a] - hi[a]
+            } else {
+                0.0
+            }
+        });
+        let m = q.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+        (m > FAR_DIAGONALS * self.diag).then_some(q)
+    }
+
+    /// The nearest triangle to a point that is not NaN, or, for a point far
+    /// from the mesh, its distance and direction.
+    ///
+    /// Far from the box (more than [`FAR_DIAGONALS`] diagonals) every point
+    /// is outside: a closed mesh holds nothing outside its box, and the
+    /// winding number of any mesh there is below 1/2 (a solid angle of at
+    /// most area / distance^2). Deciding this before the search matters,
+    /// because at such distances the squared distances of all triangles
+    /// round to the same f64 (the nearest one, and with it the
+    /// pseudo-normal sign, is then arbitrary), and beyond 1e154 they
+    /// overflow and the search finds nothing.
+    fn probe(&self, p: [f64; 3], seed: Hit) -> Probe {
+        let far = self.far_excess(p);
+        if p.iter().all(|c| c.is_finite()) {
+            let h = self.bvh.closest(p, seed);
+            if h.tri != u32::MAX && h.d2.is_finite() {
+                if far.is_none() {
+                    return Probe::Near(h);
+                }
+                let d = h.d2.sqrt();
+                return Probe::Far {
+                    distance: d,
+                    direction: sub(p, h.point).map(|c| c / d),
+                };
+            }
+        }
+        // Infinite, or so far that the squares overflow (coordinates are
+        // below MAX_COORDINATE, so only far points get here): the excess
+        // over the box, scaled to stay finite. Its length differs from the
+        // distance to the mesh by at most the box's diagonal, which is
+        // below one f64 step at these distances.
+        let q = far.unwrap_or([f64::INFINITY; 3]);
+        let m = q.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+        let s = if m.is_infinite() {
+            q.map(|c| if c.is_infinite() { c.signum() } else { 0.0 })
+        } else {
+            q.map(|c| c / m)
+        };
+        let n = norm(s);
+        Probe::Far {
+            distance: m * n,
+            direction: s.map(|c| c / n),
+        }
     }
 
     /// Generalized winding number at `p` (fast, hierarchical), where the
-    /// field was built with [`SignMethod::Winding`].
+    /// field was built with [`SignMethod::Winding`]. It tends to 0 far away and is 0 at an infinite coordinate.
     pub fn winding_number(&self, p: [f64; 3]) -> Option<f64> {
         match &self.sign {
+            Sign::Winding { .. } if p.iter().any(|c| c.is_infinite()) && !p.iter().any(|c| c.is_nan()) => Some(0.0),
             Sign::Winding { expansions } => Some(winding::winding_number(&self.bvh, expansions, p)),
             Sign::Pseudo { .. } => None,
         }
@@ -341,6 +454,14 @@ impl MeshField {
             return 0.0;
         }
         self.sign_at(p, h) * d
+    }
+
+    /// The field's value at a located point.
+    fn value_of(&self, p: [f64; 3], probe: &Probe) -> f64 {
+        match probe {
+            Probe::Near(h) => self.value_from(p, h),
+            Probe::Far { distance, .. } => -distance,
+        }
     }
 }
 
@@ -399,19 +520,29 @@ impl Field for MeshField {
         &self.name
     }
 
+    fn is_signed_distance(&self) -> bool {
+        true
+    }
+
     fn eval(&self, p: [f64; 3]) -> f64 {
         if p.iter().any(|c| c.is_nan()) {
             return f64::NAN;
         }
-        let h = self.bvh.closest(p, Hit::NONE);
-        self.value_from(p, &h)
+        self.value_of(p, &self.probe(p, Hit::NONE))
     }
 
     fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
         if p.iter().any(|c| c.is_nan()) {
             return (f64::NAN, [f64::NAN; 3]);
         }
-        let h = self.bvh.closest(p, Hit::NONE);
+        let h = match self.probe(p, Hit::NONE) {
+            Probe::Near(h) => h,
+            // Outside: the value falls moving away from the mesh.
+            Probe::Far {
+                distance,
+                direction,
+            } => return (-distance, direction.map(|c| -c)),
+        };
         let d = h.d2.sqrt();
         if d == 0.0 || !d.is_finite() {
             // On the surface: the inward face normal.
@@ -450,6 +581,8 @@ impl Field for MeshField {
             return either;
         }
         let inside = match &self.sign {
+            // The whole box far away: outside, as for single points.
+            _ if d - h - slack > FAR_DIAGONALS * self.diag => Some(false),
             // Closed and oriented: the sign cannot change off the surface.
             Sign::Pseudo { .. } => Some(self.eval(c) > 0.0),
             Sign::Winding { expansions } => {
@@ -495,9 +628,11 @@ impl Field for MeshField {
             if prev != u32::MAX {
                 self.bvh.test(p, prev as usize, &mut seed);
             }
-            let h = self.bvh.closest(p, seed);
-            prev = h.tri;
-            out[i] = self.value_from(p, &h) as f32;
+            let probe = self.probe(p, seed);
+            if let Probe::Near(h) = &probe {
+                prev = h.tri;
+            }
+            out[i] = self.value_of(p, &probe) as f32;
         }
     }
 }

@@ -113,7 +113,7 @@ pub mod winding;
 
 pub use field::{BuildOptions, Closest, MeshField, SignMethod};
 pub use geom::Feature;
-pub use mesh::{Topology, TriMesh, DEGENERATE_RATIO};
+pub use mesh::{Topology, TriMesh, DEGENERATE_RATIO, MAX_COORDINATE};
 
 /// Errors of mesh validation and field building.
 #[derive(Debug, thiserror::Error)]
@@ -131,6 +131,16 @@ pub enum MeshError {
         vertex: usize,
         /// Its position.
         value: [f64; 3],
+    },
+    /// A coordinate is too large for distances to be computed.
+    #[error("vertex {vertex} at {value:?} is farther than {limit:e} from the origin; scale the mesh")]
+    HugeCoordinate {
+        /// Vertex index.
+        vertex: usize,
+        /// Its position.
+        value: [f64; 3],
+        /// The largest coordinate accepted.
+        limit: f64,
     },
     /// A triangle refers to a vertex that does not exist.
     #[error("triangle {triangle} has indices {indices:?}, but there are {vertices} vertices")]

@@ -102,6 +102,10 @@ impl Topology {
 /// it repeats an index.
 pub const DEGENERATE_RATIO: f64 = 1e-12;
 
+/// Largest vertex coordinate accepted (by magnitude): squared distances
+/// between points of the mesh's box then fit an f64.
+pub const MAX_COORDINATE: f64 = 1e150;
+
 pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -157,6 +161,18 @@ impl TriMesh {
             return Err(MeshError::NonFinite {
                 vertex: i,
                 value: *v,
+            });
+        }
+        if let Some((i, v)) = self
+            .vertices
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.iter().any(|c| c.abs() > MAX_COORDINATE))
+        {
+            return Err(MeshError::HugeCoordinate {
+                vertex: i,
+                value: *v,
+                limit: MAX_COORDINATE,
             });
         }
         let n = self.vertices.len();
