@@ -26,6 +26,15 @@ pub const POINT_LOOP_BUDGET: u64 = 100_000;
 /// `if` that sets two variables adds 200k).
 pub const MERGE_BUDGET: u64 = 1 << 21;
 
+/// Expression nodes one lowering (or one point of the per-point fallback)
+/// may build, about 1 GiB with everything the graph later costs. Objects
+/// calling objects multiply: 30 objects each calling the one before with
+/// two different arguments build 2^30 copies of the first. Calls with the
+/// same arguments are shared (see [`Exec::call_object`]), so this only
+/// refuses programs whose graph is really that large, and does so while
+/// it grows, before the memory is spent.
+pub const NODE_BUDGET: u64 = 1 << 24;
+
 /// Why a model cannot become one expression graph.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Stop {
@@ -237,8 +246,13 @@ pub struct Exec<'p> {
     /// Error code so far (0 = none).
     pub err: Expr,
     /// Every error site met, in evaluation order: (truth value of "this
-    /// error is raised here", code). `err` is their first-wins fold.
-    pub sites: Vec<(Expr, f64)>,
+    /// error is raised here", code). `err` is their first-wins fold. The
+    /// code is a constant, or for a whole object call the callee's own
+    /// error code.
+    pub sites: Vec<(Expr, Expr)>,
+    /// Call results replayed into `sites` so far, by guard and callee
+    /// error code: the same pair again adds nothing (first wins).
+    replayed: HashSet<(Part, Part)>,
     /// Truth value of "this statement runs" (inside point-dependent `if`s).
     guard: Expr,
     budget: u64,
@@ -246,6 +260,44 @@ pub struct Exec<'p> {
     merges: u64,
     /// Set when a loop ran out of iterations.
     pub limit_hit: bool,
+    /// [`Expr::nodes_created`] when this run started.
+    nodes_at_start: u64,
+    /// Object calls already run, by callee, guard and argument values.
+    calls: HashMap<CallKey, Called>,
+}
+
+/// One part of a call's identity: a node, or a constant by its bits
+/// (constants built apart are equal; the per-point fallback makes every
+/// value one).
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+enum Part {
+    Node(*const microfrep_core::ExprNode),
+    Const(u64),
+}
+
+fn part(e: &Expr) -> Part {
+    match e.as_const() {
+        Some(v) => Part::Const(v.to_bits()),
+        None => Part::Node(e.node()),
+    }
+}
+
+/// An object call: the callee and its arguments.
+#[derive(Clone, PartialEq, Eq, Hash)]
+struct CallKey {
+    object: *const Object,
+    args: Vec<Vec<Part>>,
+}
+
+/// What a call gave: its value, the callee's final `s` and its error code
+/// wherever it is reached (0: none). It keeps the argument expressions
+/// alive, so the node addresses in its key cannot be reused by other
+/// nodes while the entry exists.
+struct Called {
+    value: Expr,
+    s: Vec<Slot>,
+    error: Expr,
+    _args: Vec<Vec<Expr>>,
 }
 
 /// What running the evaluated object gives: its value and the final
@@ -273,11 +325,30 @@ impl<'p> Exec<'p> {
             table,
             err: c(0.0),
             sites: Vec::new(),
+            replayed: HashSet::new(),
             guard: c(1.0),
             budget,
             merges: MERGE_BUDGET,
             limit_hit: false,
+            nodes_at_start: Expr::nodes_created(),
+            calls: HashMap::new(),
         }
+    }
+
+    /// Refuses to go on once this run has built [`NODE_BUDGET`] nodes.
+    fn check_size(&self, pos: Pos) -> Result<(), Stop> {
+        let built = Expr::nodes_created().wrapping_sub(self.nodes_at_start);
+        if built <= NODE_BUDGET {
+            return Ok(());
+        }
+        Err(Stop::Static(
+            format!(
+                "the model grows past {NODE_BUDGET} expression nodes while it is built; objects that call other objects with different arguments, or \
+                 loops around calls, multiply its size: reuse results in variables, or \
+                 write the model with fewer nested calls"
+            ),
+            pos,
+        ))
     }
 
     /// True once an error is certain: nothing after it matters.
@@ -295,7 +366,7 @@ impl<'p> Exec<'p> {
             line: pos.line,
             col: pos.col,
         });
-        self.sites.push((hit.clone(), code));
+        self.sites.push((hit.clone(), c(code)));
         let new = Expr::select(hit, c(code), c(0.0));
         self.err = Expr::select(self.err.clone(), self.err.clone(), new);
     }
@@ -346,6 +417,7 @@ impl<'p> Exec<'p> {
     }
 
     fn stmt(&mut self, s: &Stmt, env: &mut Env) -> Result<(), Stop> {
+        self.check_size(stmt_pos(s))?;
         grow(|| self.stmt_inner(s, env))
     }
 
@@ -559,6 +631,7 @@ impl<'p> Exec<'p> {
     }
 
     fn expr(&mut self, e: &ast::Expr, env: &mut Env) -> Result<Expr, Stop> {
+        self.check_size(e.pos)?;
         grow(|| self.expr_inner(e, env))
     }
 
@@ -730,24 +803,98 @@ impl<'p> Exec<'p> {
         if names.len() == 2 && sizes[2] != 1 {
             return Err(Stop::Static("Wrong number of items in array".into(), pos));
         }
+        let mut vals = vec![Vec::new(); names.len()];
+        for (k, n) in names.iter().enumerate().rev() {
+            vals[k] = self.array_arg(n, args[k].pos, env);
+        }
+        // A call with the same callee and argument values as an earlier
+        // one gives the same value, `s` and error code, so its result is
+        // shared: the graph stays a DAG instead of copying the callee once
+        // per call path (18 objects each calling the one before twice were
+        // 2^18 copies). For that the callee runs unguarded, collecting its
+        // own error sites; its error code then joins this run's sites as
+        // one site under the guard of each call. Not once an error is
+        // certain: the callee then stops early.
+        if self.dead() {
+            let (value, s) = self.call_fresh(obj, vals)?;
+            if let Some(sname) = names.get(2) {
+                env.set_array(sname, s, pos)?;
+            }
+            return Ok(value);
+        }
+        let key = CallKey {
+            object: obj,
+            args: vals.iter().map(|a| a.iter().map(part).collect()).collect(),
+        };
+        if !self.calls.contains_key(&key) {
+            let outer = (
+                std::mem::take(&mut self.sites),
+                std::mem::take(&mut self.replayed),
+                std::mem::replace(&mut self.err, c(0.0)),
+                std::mem::replace(&mut self.guard, c(1.0)),
+            );
+            let run = self.call_fresh(obj, vals.clone());
+            let own = std::mem::replace(&mut self.sites, outer.0);
+            (self.replayed, self.err, self.guard) = (outer.1, outer.2, outer.3);
+            let (value, s) = run?;
+            let error = super::prune::error_code(&own);
+            let done = Called {
+                value,
+                s,
+                error,
+                _args: vals,
+            };
+            self.calls.insert(key.clone(), done);
+        }
+        let done = &self.calls[&key];
+        let (value, s, error) = (done.value.clone(), done.s.clone(), done.error.clone());
+        self.raise_from_call(error);
+        if let Some(sname) = names.get(2) {
+            env.set_array(sname, s, pos)?;
+        }
+        Ok(value)
+    }
+
+    /// Records the error code `code` of an object call (0 where the callee
+    /// raises nothing) as a site under the current guard.
+    fn raise_from_call(&mut self, code: Expr) {
+        if code.as_const() == Some(0.0) || self.dead() {
+            return;
+        }
+        if !self.replayed.insert((part(&self.guard), part(&code))) {
+            return;
+        }
+        let hit = if is_true(&self.guard) {
+            code.ne_(0.0)
+        } else {
+            self.guard.and(&code)
+        };
+        let new = Expr::select(hit.clone(), code.clone(), c(0.0));
+        self.sites.push((hit, code));
+        self.err = Expr::select(self.err.clone(), self.err.clone(), new);
+    }
+
+    /// Runs the body of `obj` on the argument values `vals` (`x`, `a` and
+    /// maybe `s`): its value and final `s`.
+    fn call_fresh(
+        &mut self,
+        obj: &'p Object,
+        vals: Vec<Vec<Expr>>,
+    ) -> Result<(Expr, Vec<Slot>), Stop> {
         let mut callee = Env::default();
         let roles = ["x", "a", "s"];
-        for (k, n) in names.iter().enumerate().rev() {
-            let vals = self.array_arg(n, args[k].pos, env);
+        for (k, v) in vals.into_iter().enumerate() {
             callee
                 .arrays
-                .insert(roles[k].into(), vals.into_iter().map(Slot::set).collect());
+                .insert(roles[k].into(), v.into_iter().map(Slot::set).collect());
         }
         callee
             .arrays
             .entry("s".into())
             .or_insert_with(|| vec![Slot::set(c(0.0))]);
         let v = self.call_body(obj, &mut callee)?;
-        if let Some(sname) = names.get(2) {
-            let s = callee.arrays.remove("s").unwrap_or_default();
-            env.set_array(sname, s, pos)?;
-        }
-        Ok(v)
+        let s = callee.arrays.remove("s").unwrap_or_default();
+        Ok((v, s))
     }
 }
 
@@ -769,4 +916,15 @@ fn fit(v: Vec<Expr>, n: usize) -> Vec<Slot> {
     let mut s: Vec<Slot> = v.into_iter().take(n).map(Slot::set).collect();
     s.resize(n.max(1), Slot::set(c(0.0)));
     s
+}
+
+/// Where a statement starts.
+fn stmt_pos(s: &Stmt) -> Pos {
+    match s {
+        Stmt::Assign { pos, .. }
+        | Stmt::AssignIndex { pos, .. }
+        | Stmt::AssignArray { pos, .. }
+        | Stmt::If { pos, .. }
+        | Stmt::While { pos, .. } => *pos,
+    }
 }

@@ -10,12 +10,12 @@ use microfrep_core::{Expr, Interval, IntervalEval, Tape};
 
 /// The first-wins error code of `sites` (in evaluation order), without the
 /// sites that can never fire.
-pub fn error_code(sites: &[(Expr, f64)]) -> Expr {
+pub fn error_code(sites: &[(Expr, Expr)]) -> Expr {
     let live = reachable(sites);
     let mut err = Expr::constant(0.0);
     for ((hit, code), keep) in sites.iter().zip(live) {
         if keep {
-            let new = Expr::select(hit.clone(), Expr::constant(*code), Expr::constant(0.0));
+            let new = Expr::select(hit.clone(), code.clone(), Expr::constant(0.0));
             err = Expr::select(err.clone(), err, new);
         }
     }
@@ -23,10 +23,14 @@ pub fn error_code(sites: &[(Expr, f64)]) -> Expr {
 }
 
 /// Per site: whether its condition may be true somewhere.
-fn reachable(sites: &[(Expr, f64)]) -> Vec<bool> {
+fn reachable(sites: &[(Expr, Expr)]) -> Vec<bool> {
     let conds: Vec<Expr> = sites.iter().map(|(h, _)| h.clone()).collect();
     if conds.is_empty() {
         return Vec::new();
+    }
+    // Constant conditions (the per-point fallback's) need no bound.
+    if conds.iter().all(|h| h.as_const().is_some()) {
+        return conds.iter().map(|h| h.as_const() != Some(0.0)).collect();
     }
     let tape = Tape::with_outputs(&conds);
     let mut ie = IntervalEval::new(&tape);
