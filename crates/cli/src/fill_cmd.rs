@@ -1,75 +1,125 @@
 //! `microfrep fill PART`: the part filled with a structure, to a mesh, a
-//! slice stack or a HyperFun file, with the figures that matter.
+//! beam-lattice 3MF, a slice stack or a HyperFun file, with the figures
+//! that matter measured on what was built (the facade's `fill` and its
+//! report; this verb only parses, orders the steps and prints).
 
-use crate::common::{frame, num, ModelArgs, RunArgs};
-use anyhow::{bail, Result};
+use crate::common::{num, parse_box, ModelArgs, RunArgs};
+use anyhow::{bail, Context, Result};
 use clap::Args;
-use microfrep::fill::{fill, Density, FillOptions, Structure};
-use microfrep::LoadOptions;
-use std::path::PathBuf;
+use microfrep::fill::{fill, Density, FillOptions, FillReport, Filled, MeasureOptions, Part, Structure};
+use microfrep::{Bounds, LoadOptions};
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct FillArgs {
     #[command(flatten)]
     part: ModelArgs,
     /// Output: a mesh (.stl .obj .ply .3mf), a HyperFun file (.hf), or a
-    /// directory for a slice stack (see --format).
+    /// slice stack directory (an existing directory, a path ending in `/`,
+    /// or any path with --format).
     #[arg(short, long)]
     output: PathBuf,
     /// gyroid, schwarz-p, schwarz-d, neovius, iwp, fks, sc, bcc, fcc, octet, kelvin, diamond, rods, pores, irregular.
     #[arg(long)]
     structure: String,
-    /// Cell size (model units, millimetres).
+    /// Cell size (millimetres).
     #[arg(long)]
     cell: f64,
     /// Infill density (volume fraction, 0..1).
     #[arg(long, conflicts_with_all = ["density_grade", "density_expr"])]
     density: Option<f64>,
-    /// Graded by depth: SURFACE,INNER,DEPTH (density just below the skin, from DEPTH inwards).
-    #[arg(long)]
+    /// Graded by depth: SURFACE,INNER,DEPTH (density just below the skin, from DEPTH mm further in).
+    #[arg(long, conflicts_with = "density_expr")]
     density_grade: Option<String>,
-    /// Density as a HyperFun expression of x[1..3] and d (depth below the surface).
+    /// Density as a HyperFun expression of x[1..3] and d (depth below the surface, mm).
     #[arg(long)]
     density_expr: Option<String>,
-    /// Solid skin of this thickness joined to the infill.
+    /// Solid skin of this thickness (mm) joined to the infill.
     #[arg(long)]
     shell: Option<f64>,
     /// TPMS sheets instead of networks.
     #[arg(long)]
     sheet: bool,
-    /// Write a strut fill to .3mf as plain triangles instead of a beam lattice.
+    /// Write a strut fill to .3mf as one triangle mesh instead of a beam lattice.
     #[arg(long)]
     triangles: bool,
-    /// Seed of irregular pores.
+    /// Seed of irregular pores (0 to 2^53).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Cells (mesh) or voxels (figures) on the longest side (default 256 and 128).
+    /// Mesh cells along the longest side, or `auto` (default): cells of at
+    /// most half the thinnest wall, strut or skin measured.
     #[arg(long, conflicts_with = "voxel")]
-    resolution: Option<usize>,
-    /// Cell size of the mesh (model units).
+    resolution: Option<String>,
+    /// Mesh cell size (mm).
     #[arg(long)]
     voxel: Option<f64>,
-    /// Slice stack format for a directory output: png, svg or cli.
-    #[arg(long, default_value = "png")]
-    format: String,
-    /// Slice layer and pixel size for a directory output.
+    /// Fail (writing nothing) when the mesh has more than PCT % less
+    /// volume than the model sampled in every cell.
+    #[arg(long, value_name = "PCT", default_value_t = 5.0)]
+    max_volume_loss: f64,
+    /// Slice stack format (png, svg, cli, 3mf); makes the output a slice stack.
+    #[arg(long)]
+    format: Option<String>,
+    /// Slice layer height (mm).
     #[arg(long, default_value_t = 0.05)]
     layer: f64,
+    /// Slice pixel size (mm).
     #[arg(long, default_value_t = 0.025)]
     pixel: f64,
+    /// The thinnest wall or strut the printer makes (mm): thinner measured
+    /// features refuse the job (nothing written), or warn with --thin warn.
+    #[arg(long, value_name = "MM")]
+    min_wall: Option<f64>,
+    /// What --min-wall does with a thinner feature: refuse (default) or warn.
+    #[arg(long, value_enum, default_value_t = ThinAction::Refuse)]
+    thin: ThinAction,
     #[command(flatten)]
     volume: crate::mesh_cmd::VolumeArgs,
     #[command(flatten)]
     run: RunArgs,
 }
 
-pub fn run(a: FillArgs) -> Result<()> {
-    a.run.init()?;
-    let volume = a.volume.options(&a.output)?;
-    let structure = Structure::parse(&a.structure, a.sheet).ok_or_else(|| {
-        anyhow::anyhow!("unknown structure '{}': {}", a.structure, Structure::NAMES)
-    })?;
-    let density = match (&a.density, &a.density_grade, &a.density_expr) {
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ThinAction {
+    Refuse,
+    Warn,
+}
+
+/// What the output is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Output {
+    HyperFun,
+    Mesh,
+    BeamLattice,
+    Slices,
+}
+
+fn output_kind(a: &FillArgs, structure: Structure) -> Result<Output> {
+    let o = &a.output;
+    let dir = a.format.is_some() || o.is_dir() || o.to_string_lossy().ends_with('/');
+    if dir {
+        return Ok(Output::Slices);
+    }
+    let ext = o
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    Ok(match ext.as_deref() {
+        Some("hf") => Output::HyperFun,
+        Some("3mf") if structure.is_struts() && !a.triangles && a.volume.is_empty() => {
+            Output::BeamLattice
+        }
+        Some("stl" | "obj" | "ply" | "3mf") => Output::Mesh,
+        _ => bail!(
+            "-o {}: not a known output (a mesh .stl .obj .ply .3mf, a HyperFun .hf, or a slice \
+             stack directory: an existing directory, a path ending in '/', or --format)",
+            o.display()
+        ),
+    })
+}
+
+fn density_of(a: &FillArgs) -> Result<Density> {
+    Ok(match (&a.density, &a.density_grade, &a.density_expr) {
         (Some(r), None, None) => Density::Constant(*r),
         (None, Some(g), None) => {
             let v: Vec<f64> = g
@@ -90,11 +140,45 @@ pub fn run(a: FillArgs) -> Result<()> {
         }
         (None, None, Some(e)) => Density::Expression(e.clone()),
         _ => bail!("give one of --density, --density-grade, --density-expr"),
+    })
+}
+
+pub fn run(a: FillArgs) -> Result<()> {
+    a.run.init()?;
+    let structure = Structure::parse(&a.structure, a.sheet).ok_or_else(|| {
+        anyhow::anyhow!("unknown structure '{}': {}", a.structure, Structure::NAMES)
+    })?;
+    if a.sheet && !matches!(structure, Structure::Tpms { .. }) {
+        bail!("--sheet applies to TPMS structures only");
+    }
+    let kind = output_kind(&a, structure)?;
+    microfrep::io::atomic::check_not_input(&a.output)?;
+    let slice_format = match kind {
+        Output::Slices => Some(
+            a.format
+                .as_deref()
+                .unwrap_or("png")
+                .parse::<microfrep::fab::Format>()
+                .map_err(|e| anyhow::anyhow!("--format: {e}"))?,
+        ),
+        _ => None,
+    };
+    if let Some(w) = a.min_wall {
+        if !(w.is_finite() && w > 0.0) {
+            bail!("--min-wall {w} must be a positive thickness");
+        }
+    }
+    let volume = match kind {
+        Output::Mesh => a.volume.options(&a.output)?,
+        _ if !a.volume.is_empty() => {
+            bail!("--implicit, --volumetric and --palette add to a .3mf mesh output")
+        }
+        _ => None,
     };
     let opts = FillOptions {
         structure,
         cell: a.cell,
-        density,
+        density: density_of(&a)?,
         skin: a.shell,
         seed: a.seed,
     };
@@ -104,137 +188,322 @@ pub fn run(a: FillArgs) -> Result<()> {
         fields: a.part.fields.clone(),
         memory_limit: None,
     };
+    let bounds = match &a.part.bounds {
+        Some(s) => {
+            let (lo, hi) = parse_box("--bounds", s)?;
+            Some(Bounds::new(lo, hi))
+        }
+        None => None,
+    };
     let bar = a.run.bar("");
     let progress = |s: &str, d: u64, t: u64| {
         bar.set_message(s.to_string());
-        bar.set_length(t);
+        bar.set_length(t.max(1));
         bar.set_position(d);
     };
-    let f = fill(&a.part.model, &part_opts, &opts, &progress);
-    bar.finish_and_clear();
-    let f = f.map_err(anyhow::Error::new)?;
-    for p in &f.model.inputs {
-        microfrep::io::atomic::register_input(p);
-    }
-    let ext = a
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    let written = match ext.as_deref() {
-        Some("hf") => {
-            microfrep::io::atomic::write_file(&a.output, f.source.as_bytes())?;
-            serde_json::json!({ "kind": "hyperfun", "binding": f.binding })
+    let built = (|| -> Result<(Filled, FillReport)> {
+        let part = Part::load(&a.part.model, &part_opts, bounds, &progress)?;
+        for p in &part.inputs {
+            microfrep::io::atomic::register_input(p);
         }
-        Some("3mf") if structure.is_struts() && !a.triangles => {
-            let Structure::Struts(kind) = structure else {
-                unreachable!("checked")
-            };
-            let Some(rho) = a.density else {
+        let f = fill(&part, &opts, &progress)?;
+        let r = f.measure(&MeasureOptions::default(), &progress)?;
+        Ok((f, r))
+    })();
+    bar.finish_and_clear();
+    let (f, r) = built.with_context(|| format!("fill {}", a.part.model))?;
+    // Printability before anything is written.
+    if let (Some(w), Some(t)) = (a.min_wall, &r.thinnest) {
+        let thinnest = match &r.skin {
+            Some(s) => t.min.min(s.min),
+            None => t.min,
+        };
+        if thinnest < w {
+            let msg = format!(
+                "the thinnest wall or strut measures {} mm (at {}), below --min-wall {w}",
+                num(thinnest),
+                point(&t.at)
+            );
+            match a.thin {
+                ThinAction::Refuse => bail!("{msg}; nothing written (--thin warn writes it anyway)"),
+                ThinAction::Warn => eprintln!("warning: {msg}"),
+            }
+        }
+    }
+    let b = f.bounds;
+    let written = match kind {
+        Output::HyperFun => {
+            let text = f.hyperfun()?;
+            microfrep::io::atomic::write_file(&a.output, text.as_bytes())?;
+            serde_json::json!({ "kind": "hyperfun", "binding": f.binding(), "bytes": text.len() })
+        }
+        Output::BeamLattice => {
+            let Some(rad) = f.design.strut_radius else {
                 bail!("a beam lattice takes a constant --density (or write --triangles)")
             };
-            if a.shell.is_some() {
-                bail!("a beam lattice with a skin: write --triangles (one solid mesh)")
-            }
-            if volume.is_some() {
-                bail!("--implicit, --volumetric and --palette add to a mesh: write --triangles")
-            }
-            let k = microfrep::structures::struts::StrutLattice::ALL[kind as usize - 1];
-            let r = microfrep::structures::density::strut_radius(
-                k,
-                rho,
-                microfrep::structures::density::STRUT_CELLS,
-            )? * a.cell;
-            let b = frame(&f.model, &a.part, &a.run)?;
-            let part = f.part()?;
-            let (beams, nodes) = microfrep::export::beam_lattice_3mf(
-                &part,
-                kind,
-                a.cell,
-                r,
-                b,
-                a.resolution.unwrap_or(128),
-                &a.output,
-            )?;
-            serde_json::json!({ "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": r })
-        }
-        Some("stl" | "obj" | "ply" | "3mf") => {
-            let bounds = frame(&f.model, &a.part, &a.run)?;
-            if let Some(v) = &volume {
-                v.check(&f.model.shape, bounds)?;
-            }
-            let b = bounds.corners();
-            let n = match (a.resolution, a.voxel) {
-                (Some(n), _) => n,
-                (None, Some(v)) => microfrep::mesh::Grid::resolution_for_voxel(b, v)?,
-                (None, None) => 256,
+            let Structure::Struts(k) = structure else {
+                unreachable!("beam lattices are struts")
             };
-            let mo = microfrep::mesh::MeshOptions::new(b, n);
-            let s = microfrep::mesh::job::mesh_to_file(
-                &f.model.shape,
-                &mo,
+            let n = mesh_resolution(&a, &f, &r, b)?;
+            let (beams, nodes) = microfrep::export::beam_lattice_fill_3mf(
+                &f.core,
+                f.skin.as_ref(),
+                k,
+                a.cell,
+                rad,
+                b,
+                n,
                 &a.output,
-                &Default::default(),
-                &|_, _| {},
             )?;
-            let mut j = serde_json::json!({ "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges, "volume": s.volume, "resolution": n });
+            serde_json::json!({
+                "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": rad,
+                "skin_mesh": f.skin.is_some(), "resolution": n,
+                "bytes": file_size(&a.output),
+            })
+        }
+        Output::Mesh => {
+            let n = mesh_resolution(&a, &f, &r, b)?;
+            let (s, shells) = mesh_checked(&a, &f, b, n)?;
+            let mut j = serde_json::json!({
+                "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges,
+                "volume": s.volume, "resolution": n, "cell": s.cell, "shells": shells,
+                "bytes": file_size(&a.output),
+            });
             if let Some(v) = &volume {
-                let r =
-                    crate::mesh_cmd::apply_volume(v, &a.output, &f.model.shape, bounds, &a.run)?;
-                j["volumetric"] = crate::mesh_cmd::volume_json(&r);
+                let res =
+                    crate::mesh_cmd::apply_volume(v, &a.output, &f.model, b, &a.run)?;
+                j["volumetric"] = crate::mesh_cmd::volume_json(&res);
             }
             j
         }
-        _ => {
-            let b = frame(&f.model, &a.part, &a.run)?;
+        Output::Slices => {
             let grid = microfrep::fab::SliceGrid::new(b.min, b.max, a.layer, a.pixel)?;
-            let format = match a.format.as_str() {
-                "png" => microfrep::fab::Format::Png { aa: false },
-                "svg" => microfrep::fab::Format::Svg,
-                "cli" => microfrep::fab::Format::Cli,
-                other => bail!("--format {other}: png, svg or cli"),
-            };
-            microfrep::fab::write_stack(&f.model.shape, &grid, &format, &a.output, &|| {})?;
+            let format = slice_format.expect("parsed above");
+            microfrep::fab::write_stack(&f.model, &grid, &format, &a.output, &|| {})?;
             serde_json::json!({ "kind": "slices", "layers": grid.layers })
         }
     };
-    let r = f.measure(a.resolution.unwrap_or(128).min(192))?;
     if a.run.json {
-        let s = serde_json::json!({
-            "output": a.output.display().to_string(), "written": written,
-            "density": { "target": a.density, "measured": r.density.0, "error": r.density.1 },
-            "skin": { "target": a.shell, "measured": r.skin },
-            "thinnest": r.thinnest.map(|(m, p)| serde_json::json!({ "min": m, "p10": p })),
-            "solid_components": r.components, "open_pore_fraction": r.open_pores,
-        });
-        println!("{s}");
+        println!("{}", report_json(&a, &f, &r, written));
     } else if !a.run.quiet {
-        println!(
-            "wrote {} ({})",
-            a.output.display(),
-            written["kind"].as_str().unwrap_or("")
-        );
-        if let Some((n, file)) = &f.binding {
-            println!("  the .hf form needs --field {n}={file}");
-        }
-        println!(
-            "  infill density {} ± {:.1e} (target {})",
-            num(r.density.0),
-            r.density.1,
-            a.density.map_or("graded".into(), num)
-        );
-        if let (Some(m), Some(t)) = (r.skin, a.shell) {
-            println!("  skin           {} (target {})", num(m), num(t));
-        }
-        if let Some((m, p)) = r.thinnest {
-            println!("  thinnest       {} (10th percentile {})", num(m), num(p));
-        }
-        if let (Some(c), Some(o)) = (r.components, r.open_pores) {
-            println!(
-                "  solid          {c} component(s); {:.1}% of the pores open to the outside",
-                100.0 * o
-            );
-        }
+        print_report(&a, &f, &r, &written);
     }
     Ok(())
+}
+
+fn file_size(p: &Path) -> Option<u64> {
+    std::fs::metadata(p).ok().map(|m| m.len())
+}
+
+fn point(p: &[f64; 3]) -> String {
+    format!("({}, {}, {})", num(p[0]), num(p[1]), num(p[2]))
+}
+
+/// The thinnest feature the mesh must show: the walls, struts and skin.
+fn thinnest(r: &FillReport) -> f64 {
+    let mut t = r.thinnest.as_ref().map_or(r.feature, |t| t.min);
+    if let Some(s) = &r.skin {
+        t = t.min(s.min);
+    }
+    t.max(1e-12)
+}
+
+/// Most mesh cells on a side (the mesher's limit).
+const MAX_MESH_RESOLUTION: usize = 65533;
+
+/// Mesh cells: `auto` (default) gives cells of at most half the thinnest
+/// measured feature; an explicit resolution coarser than that is refused
+/// with the one that works.
+fn mesh_resolution(a: &FillArgs, f: &Filled, r: &FillReport, b: Bounds) -> Result<usize> {
+    let longest = b.size().iter().copied().fold(0.0, f64::max);
+    let t = thinnest(r);
+    let need = (2.0 * longest / t).ceil() as usize;
+    let asked = match (a.resolution.as_deref(), a.voxel) {
+        (Some("auto") | None, None) => None,
+        (Some(s), _) => Some(s.parse::<usize>().map_err(|_| {
+            anyhow::anyhow!("--resolution '{s}': a cell count or 'auto'")
+        })?),
+        (None, Some(v)) => Some(microfrep::mesh::Grid::resolution_for_voxel(b.corners(), v)?),
+    };
+    let _ = f;
+    match asked {
+        None => {
+            if need > MAX_MESH_RESOLUTION {
+                bail!(
+                    "the thinnest feature ({} mm) needs {need} mesh cells on the part's longest \
+                     side ({} mm), over the limit of {}; write a slice stack or a .hf model, or \
+                     fill with thicker walls (a higher --density or a larger --cell)",
+                    num(t),
+                    num(longest),
+                    MAX_MESH_RESOLUTION
+                );
+            }
+            Ok(need.max(16))
+        }
+        Some(n) if n < need => bail!(
+            "--resolution {n} gives mesh cells of {} mm, more than half the thinnest wall, strut \
+             or skin measured ({} mm): the mesh would lose them; use --resolution {need} or more, \
+             or --resolution auto",
+            num(longest / n as f64),
+            num(t)
+        ),
+        Some(n) => Ok(n),
+    }
+}
+
+/// Meshes into a staging folder, checks the written mesh (a skinned part
+/// has its outer shell and at least one inner one), then moves it onto the
+/// output: nothing replaces the output before the job has succeeded.
+fn mesh_checked(
+    a: &FillArgs,
+    f: &Filled,
+    b: Bounds,
+    n: usize,
+) -> Result<(microfrep::mesh::job::Summary, usize)> {
+    let name = a
+        .output
+        .file_name()
+        .ok_or_else(|| anyhow::anyhow!("-o {}: not a file name", a.output.display()))?;
+    let parent = a
+        .output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let stage = microfrep::io::atomic::AtomicDir::create(&parent.join(".microfrep-fill-stage"))?;
+    let staged = stage.path().join(name);
+    let mo = microfrep::mesh::MeshOptions::new(b.corners(), n);
+    let job = microfrep::mesh::job::JobOptions {
+        max_volume_loss: Some(a.max_volume_loss / 100.0),
+        ..Default::default()
+    };
+    let s = microfrep::mesh::job::mesh_to_file(&f.model, &mo, &staged, &job, &|_, _| {})
+        .map_err(|e| anyhow::anyhow!("{e}").context(format!("meshing {}", a.output.display())))?;
+    let shells = microfrep::fill::report::mesh_shells(&staged)?;
+    if f.skin.is_some() && shells < 2 {
+        bail!(
+            "the written mesh has {shells} shell(s): a skinned part needs its outer and inner \
+             surfaces; nothing written (raise --resolution)"
+        );
+    }
+    std::fs::rename(&staged, &a.output)
+        .with_context(|| format!("moving the mesh onto {}", a.output.display()))?;
+    drop(stage);
+    Ok((s, shells))
+}
+
+fn report_json(a: &FillArgs, f: &Filled, r: &FillReport, written: serde_json::Value) -> serde_json::Value {
+    let t = |t: &Option<microfrep::fill::report::ThicknessFigure>| {
+        t.as_ref().map(|t| {
+            serde_json::json!({ "min": t.min, "at": t.at, "p10": t.p10, "mean": t.mean, "error": r.voxel })
+        })
+    };
+    let c = r.connectivity.as_ref();
+    serde_json::json!({
+        "output": a.output.display().to_string(),
+        "written": written,
+        "structure": f.options.structure.name(),
+        "cell": f.options.cell,
+        "density": { "target": a.density, "measured": r.density.value, "error": r.density.error },
+        "volume_fraction": r.density.value,
+        "volume_fraction_error": r.density.error,
+        "skin": r.skin.as_ref().map(|s| serde_json::json!({
+            "target": a.shell, "min": s.min, "at": s.at, "mean": s.mean, "rays": s.rays,
+            "error": s.error, "unbounded_rays": s.unbounded,
+        })),
+        "thinnest": t(&r.thinnest),
+        "pore_size": t(&r.pores),
+        "connectivity": c.map(|c| serde_json::json!({
+            "voxel": c.voxel, "resolved": c.resolved,
+            "solid_components": c.solid_components, "loose_fraction": c.loose_fraction,
+            "open_pore_fraction": c.open_fraction, "closed_pores": c.closed_pores,
+            "percolates": c.percolates, "sealed_by_skin": r.sealed,
+        })),
+        "measured": {
+            "voxel": r.voxel, "cube": r.box_side, "cubes": r.boxes,
+            "thickness_cubes": r.thickness_boxes, "feature": r.feature, "seconds": r.seconds,
+        },
+        "notes": f.notes.iter().chain(&r.notes).collect::<Vec<_>>(),
+    })
+}
+
+fn print_report(a: &FillArgs, f: &Filled, r: &FillReport, written: &serde_json::Value) {
+    let kind = written["kind"].as_str().unwrap_or("");
+    println!("wrote {} ({kind})", a.output.display());
+    if kind == "mesh" {
+        println!(
+            "  mesh           {} triangles, {} shell(s), cells of {} mm, {} bytes",
+            written["triangles"],
+            written["shells"],
+            num(written["cell"].as_f64().unwrap_or(f64::NAN)),
+            written["bytes"]
+        );
+    }
+    if let Some((n, file)) = f.binding() {
+        if kind == "hyperfun" {
+            println!("  load it with --field {n}={file}");
+        }
+    }
+    println!(
+        "  infill density {} ± {} (target {})",
+        num(r.density.value),
+        num(r.density.error),
+        a.density.map_or("graded".into(), num)
+    );
+    if let Some(s) = &r.skin {
+        println!(
+            "  skin           min {} (at {}), mean {} (target {}; {} rays along the normals)",
+            num(s.min),
+            point(&s.at),
+            num(s.mean),
+            a.shell.map_or("-".into(), num),
+            s.rays
+        );
+    }
+    if let Some(t) = &r.thinnest {
+        println!(
+            "  thinnest wall  {} ± {} at {} (10th percentile {}, mean {})",
+            num(t.min),
+            num(r.voxel),
+            point(&t.at),
+            num(t.p10),
+            num(t.mean)
+        );
+    }
+    if let Some(t) = &r.pores {
+        println!(
+            "  pore size      mean {}, min {} (10th percentile {})",
+            num(t.mean),
+            num(t.min),
+            num(t.p10)
+        );
+    }
+    if let Some(c) = &r.connectivity {
+        let sealed = match r.sealed {
+            Some(true) => "; the skin seals the pores in: nothing gets in or out",
+            Some(false) => "; the skin does not seal the pores",
+            None => "",
+        };
+        println!(
+            "  connectivity   {} solid component(s); {:.1} % of the pore volume open to the \
+             outside, {} closed pore(s){sealed}",
+            c.solid_components,
+            100.0 * c.open_fraction,
+            c.closed_pores
+        );
+    }
+    println!(
+        "  measured on    {} cubes of {} mm at {} mm voxels ({} for walls and pores; {} voxels \
+         across the thinnest designed feature, {} mm); connectivity at {} mm voxels; {:.2} s",
+        r.boxes,
+        num(r.box_side),
+        num(r.voxel),
+        r.thickness_boxes,
+        (r.feature / r.voxel).round(),
+        num(r.feature),
+        r.connectivity.as_ref().map_or("-".into(), |c| num(c.voxel)),
+        r.seconds
+    );
+    for n in f.notes.iter().chain(&r.notes) {
+        println!("  note: {n}");
+    }
 }

@@ -212,6 +212,12 @@ pub struct VolumeArgs {
 }
 
 impl VolumeArgs {
+    /// Whether none of the options was given.
+    pub fn is_empty(&self) -> bool {
+        !(self.implicit || self.volumetric || self.palette.is_some())
+            && self.volume_resolution.is_none()
+    }
+
     /// The options, or `None` when none was given; refused for outputs
     /// other than .3mf.
     pub fn options(&self, out: &std::path::Path) -> Result<Option<VolumeOptions>> {

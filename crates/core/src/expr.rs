@@ -367,6 +367,24 @@ impl Expr {
         Expr::binary(BinaryOp::Or, self.clone(), b.into())
     }
 
+    /// This expression with data-field nodes replaced: `with(field, comp,
+    /// args)` gets every field node (its arguments already rewritten) and
+    /// returns its replacement, or `None` to keep it. Used to bind a
+    /// placeholder field of a parsed expression to a graph (for example a
+    /// depth below a surface).
+    pub fn replace_fields(
+        &self,
+        with: &dyn Fn(&Arc<dyn Field>, u8, &[Expr; 3]) -> Option<Expr>,
+    ) -> Expr {
+        self.rewrite(|cur, m| match cur.node() {
+            ExprNode::Field { field, comp, args } => {
+                let args: [Expr; 3] = std::array::from_fn(|i| m(&args[i]));
+                with(field, *comp, &args).unwrap_or_else(|| cur.with_children(m))
+            }
+            _ => cur.with_children(m),
+        })
+    }
+
     /// This expression with the coordinates replaced by `p`: the inverse space
     /// mapping on which every transform and replication is built.
     pub fn remap(&self, p: &[Expr; 3]) -> Expr {

@@ -11,6 +11,14 @@ use std::fmt::Debug;
 pub trait Field: Send + Sync + Debug {
     /// Short name for diagnostics.
     fn name(&self) -> &str;
+    /// Whether the value is a signed distance (in model units, positive
+    /// inside) to the field's zero set, at least near it: a mesh's or a
+    /// scan's distance. Consumers that need a depth below the surface
+    /// (a skin, a grading) take such a value as it is and estimate one
+    /// otherwise. The default: no.
+    fn is_signed_distance(&self) -> bool {
+        false
+    }
     /// Reference value.
     fn eval(&self, p: [f64; 3]) -> f64;
     /// Value and gradient.
@@ -42,6 +50,8 @@ pub struct GridField {
     /// (min, max) of the 8 samples of each cell, for interval bounds.
     cell_range: Vec<(f64, f64)>,
     range: (f64, f64),
+    /// The samples are a signed distance ([`GridField::as_distance`]).
+    distance: bool,
 }
 
 /// Errors when building a grid field.
@@ -151,7 +161,15 @@ impl GridField {
             values,
             cell_range,
             range,
+            distance: false,
         })
+    }
+
+    /// This grid declared a signed distance (see
+    /// [`Field::is_signed_distance`]), for samples of one.
+    pub fn as_distance(mut self) -> GridField {
+        self.distance = true;
+        self
     }
 
     /// Samples a function on the grid nodes.
@@ -212,6 +230,10 @@ impl GridField {
 impl Field for GridField {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn is_signed_distance(&self) -> bool {
+        self.distance
     }
 
     fn eval(&self, p: [f64; 3]) -> f64 {

@@ -35,6 +35,24 @@ pub enum Format {
     Cli,
 }
 
+impl std::str::FromStr for Format {
+    type Err = String;
+
+    /// `png` (1-bit), `png-aa` (8-bit coverage), `svg` or `cli`.
+    fn from_str(name: &str) -> std::result::Result<Format, String> {
+        match name.to_ascii_lowercase().as_str() {
+            "png" => Ok(Format::Png { aa: false }),
+            "png-aa" => Ok(Format::Png { aa: true }),
+            "svg" => Ok(Format::Svg),
+            "cli" => Ok(Format::Cli),
+            other => Err(format!(
+                "slice format '{other}': png, png-aa, svg or cli (a 3MF slice stack: \
+                 `microfrep slice --format 3mf`)"
+            )),
+        }
+    }
+}
+
 /// The simplified, oriented loops of a layer (see [`contours`]); loops that
 /// collapse below three vertices or to no area are dropped.
 pub fn layer_polygons(shape: &Shape, grid: &SliceGrid, layer: &LayerValues) -> Vec<Polygon> {

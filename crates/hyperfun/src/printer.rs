@@ -11,7 +11,8 @@
 //! HyperFun still differs where the core gives NaN (`sqrt`, `log` of a
 //! negative) or divides by a small non-constant: it reports an error there.
 
-use microfrep_core::{BinaryOp, Expr, ExprNode, SetOp, UnaryOp};
+use microfrep_core::{BinaryOp, Expr, ExprNode, Field, SetOp, UnaryOp};
+use std::sync::Arc;
 use std::collections::HashMap;
 use std::fmt::Write;
 
@@ -32,6 +33,43 @@ pub fn to_hyperfun(expr: &Expr, object_name: &str) -> String {
 
 /// As [`to_hyperfun`], with an error for what HyperFun cannot express.
 pub fn try_to_hyperfun(expr: &Expr, object_name: &str) -> Result<String, String> {
+    try_to_hyperfun_with(expr, object_name, &|_, _| None)
+}
+
+/// How a data field is written in HyperFun: a call `name(args)` of a
+/// function the reader of the file binds (a `--field NAME=FILE` part) or of
+/// the library (a structure rebuilt from its parameters).
+#[derive(Clone, Debug)]
+pub struct FieldCall {
+    /// The function's name.
+    pub name: String,
+    /// Its arguments, in order.
+    pub args: Vec<FieldArg>,
+}
+
+/// An argument of a [`FieldCall`].
+#[derive(Clone, Debug)]
+pub enum FieldArg {
+    /// The point the field is sampled at (`x`, or a local array of the
+    /// mapped coordinates).
+    Point,
+    /// A scalar expression.
+    Expr(Expr),
+    /// An array of constants (a local array assigned whole).
+    Array(Vec<f64>),
+}
+
+/// Names the data fields of an expression: `(field, component)` to its
+/// call, `None` where the field has no HyperFun form.
+pub type FieldNames<'a> = dyn Fn(&Arc<dyn Field>, u8) -> Option<FieldCall> + 'a;
+
+/// As [`try_to_hyperfun`], writing data fields as the calls `fields`
+/// gives them.
+pub fn try_to_hyperfun_with(
+    expr: &Expr,
+    object_name: &str,
+    fields: &FieldNames<'_>,
+) -> Result<String, String> {
     let name = object_name.to_ascii_lowercase();
     let valid = name.starts_with(|c: char| c.is_ascii_alphabetic())
         && name.len() <= 255
@@ -39,7 +77,10 @@ pub fn try_to_hyperfun(expr: &Expr, object_name: &str) -> Result<String, String>
     if !valid || crate::parse(&format!("{name}(x[1], a[1]) {{ {name} = 0; }}"), "").is_err() {
         return Err(format!("'{object_name}' is not a usable object name"));
     }
-    let mut p = Printer::default();
+    let mut p = Printer {
+        fields: Some(fields),
+        ..Printer::default()
+    };
     p.count(expr);
     p.name_deep(expr)?;
     let (root, _) = p.emit(expr)?;
@@ -48,6 +89,9 @@ pub fn try_to_hyperfun(expr: &Expr, object_name: &str) -> Result<String, String>
         let _ = writeln!(out, "-- a[{}]: {pname} (default {default})", k + 1);
     }
     let _ = writeln!(out, "{name}(x[3], a[{}]) {{", p.params.len().max(1));
+    if !p.arrays.is_empty() {
+        let _ = writeln!(out, "  array {};", p.arrays.join(", "));
+    }
     for line in &p.lines {
         let _ = writeln!(out, "  {line}");
     }
@@ -58,12 +102,15 @@ pub fn try_to_hyperfun(expr: &Expr, object_name: &str) -> Result<String, String>
 type Key = *const ExprNode;
 
 #[derive(Default)]
-struct Printer {
+struct Printer<'a> {
     uses: HashMap<Key, usize>,
     names: HashMap<Key, String>,
     params: Vec<(String, f64)>,
     lines: Vec<String>,
     temps: usize,
+    /// Local array declarations (`p1[3]`), written first.
+    arrays: Vec<String>,
+    fields: Option<&'a FieldNames<'a>>,
 }
 
 /// Emitted text and its parenthesis depth.
@@ -106,7 +153,7 @@ fn number(c: f64) -> String {
     }
 }
 
-impl Printer {
+impl Printer<'_> {
     /// Counts the parents of every node (each shared node once).
     fn count(&mut self, root: &Expr) {
         let mut stack = vec![root];
@@ -217,6 +264,69 @@ impl Printer {
         Ok((format!("{f}({})", texts.join(", ")), depth))
     }
 
+    /// A local array `pN[n]`, declared at the top of the object.
+    fn array(&mut self, n: usize) -> String {
+        let name = format!("p{}", self.arrays.len() + 1);
+        self.arrays.push(format!("{name}[{n}]"));
+        name
+    }
+
+    fn field_call(&mut self, call: &FieldCall, at: &[Expr; 3]) -> Result<Text, String> {
+        let mut texts = Vec::new();
+        let mut depth = 0;
+        for a in &call.args {
+            texts.push(match a {
+                FieldArg::Point => {
+                    let identity = at
+                        .iter()
+                        .enumerate()
+                        .all(|(i, e)| matches!(e.node(), ExprNode::Var(v) if *v as usize == i));
+                    if identity {
+                        "x".to_string()
+                    } else {
+                        let mut coords = Vec::new();
+                        for e in at {
+                            coords.push(self.emit(e)?.0);
+                        }
+                        let p = self.array(3);
+                        for (i, c) in coords.iter().enumerate() {
+                            self.lines.push(format!("{p}[{}] = {c};", i + 1));
+                        }
+                        p
+                    }
+                }
+                FieldArg::Expr(e) => {
+                    let (t, d) = self.emit(e)?;
+                    depth = depth.max(d + 1);
+                    t
+                }
+                FieldArg::Array(v) => {
+                    let p = self.array(v.len().max(1));
+                    let lits: Vec<String> = v
+                        .iter()
+                        .map(|&c| {
+                            // Whole-array assignment takes signed literals only.
+                            if !c.is_finite() {
+                                "0".to_string()
+                            } else if c < 0.0 {
+                                format!("-{}", number(-c))
+                            } else {
+                                number(c)
+                            }
+                        })
+                        .collect();
+                    self.lines.push(format!("{p} = [{}];", lits.join(", ")));
+                    p
+                }
+            });
+        }
+        // A call is a temporary: its text may not be nested arbitrarily
+        // (array arguments must be names, and the call may be costly).
+        let _ = depth;
+        let t = self.temp(format!("{}({})", call.name, texts.join(", ")));
+        Ok((t, 0))
+    }
+
     fn bin(&mut self, a: &Expr, op: &str, b: &Expr) -> Result<Text, String> {
         let (ta, da) = self.emit(a)?;
         let (tb, db) = self.emit(b)?;
@@ -279,11 +389,11 @@ impl Printer {
             }
             // Other parameters have no HyperFun operator: the formula.
             ExprNode::Set { .. } | ExprNode::Blend { .. } => self.emit(&e.expand())?,
-            ExprNode::Field { field, .. } => {
-                return Err(format!(
-                    "data-driven field '{}' has no HyperFun form",
-                    field.name()
-                ));
+            ExprNode::Field { field, comp, args } => {
+                let call = self.fields.and_then(|f| f(field, *comp)).ok_or_else(|| {
+                    format!("data-driven field '{}' has no HyperFun form", field.name())
+                })?;
+                self.field_call(&call, args)?
             }
         })
     }

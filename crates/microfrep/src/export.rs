@@ -105,7 +105,7 @@ pub fn slice_3mf(
 /// A strut lattice of `kind` (1..6: sc, bcc, fcc, octet, kelvin, diamond)
 /// with cells `cell` and strut radius `radius` (model units), clipped to
 /// `part`, as a 3MF beam lattice; the part meshed at `resolution` is the
-/// lattice's clipping mesh and the representation viewers show. Returns
+/// lattice's clipping mesh (see [`beam_lattice_fill_3mf`]). Returns
 /// (beams, nodes).
 pub fn beam_lattice_3mf(
     part: &Shape,
@@ -116,18 +116,46 @@ pub fn beam_lattice_3mf(
     resolution: usize,
     out: &Path,
 ) -> Result<(usize, usize), ExportError> {
-    use microfrep_structures::strut_graph::StrutGraph;
     use microfrep_structures::struts::StrutLattice;
     let k = StrutLattice::ALL[(kind.clamp(1, 6) - 1) as usize];
-    let g = StrutGraph::tile(k, bounds.min, bounds.max, cell, |_| radius)?.clip(part.value());
+    beam_lattice_fill_3mf(part, None, k, cell, radius, bounds, resolution, out)
+}
+
+/// A filled part's struts as a 3MF beam lattice, with its skin: the
+/// lattice (of `kind`, cells `cell`, radius `radius`) is clipped to the
+/// `core` (meshed at `resolution`, an object the build does not print),
+/// and the `skin`, when there is one, is a mesh object of its own; both are
+/// items of one build. The lattice has no representation mesh (viewers
+/// that cannot draw beams show the skin alone). Returns (beams, nodes).
+#[allow(clippy::too_many_arguments)]
+pub fn beam_lattice_fill_3mf(
+    core: &Shape,
+    skin: Option<&Shape>,
+    kind: microfrep_structures::struts::StrutLattice,
+    cell: f64,
+    radius: f64,
+    bounds: Bounds,
+    resolution: usize,
+    out: &Path,
+) -> Result<(usize, usize), ExportError> {
+    use microfrep_structures::strut_graph::StrutGraph;
+    let g = StrutGraph::tile(kind, bounds.min, bounds.max, cell, |_| radius)?.clip(core.value());
+    if g.beams.is_empty() {
+        return Err(ExportError::Volumetric(
+            "no strut of the lattice lies inside the part's core: nothing to write".into(),
+        ));
+    }
     let mut m = Model::new(Unit::Millimeter);
-    let clip = m.add_mesh(Some("part"), mesh3(part, bounds, resolution)?);
+    let clip = m.add_mesh(Some("core"), mesh3(core, bounds, resolution)?);
     let mut l = BeamLattice::new(radius, 1e-4);
     for (&(a, b), r) in g.beams.iter().zip(&g.radii) {
         l.push(a, b, r[0], r[1]);
     }
     l.clipping = Some((ClipMode::Inside, clip));
-    l.representation = Some(clip);
+    let skin_id = match skin {
+        Some(s) => Some(m.add_mesh(Some("skin"), mesh3(s, bounds, resolution)?)),
+        None => None,
+    };
     let id = m.add_mesh(
         Some("lattice"),
         Mesh3 {
@@ -136,6 +164,9 @@ pub fn beam_lattice_3mf(
             ..Mesh3::default()
         },
     );
+    if let Some(s) = skin_id {
+        m.add_item(s, Transform::IDENTITY);
+    }
     m.add_item(id, Transform::IDENTITY);
     write_file(out, &m, &WriteOptions::default())?;
     Ok((g.beams.len(), g.nodes.len()))

@@ -35,6 +35,7 @@ mod tables;
 mod tpms;
 
 pub use struts::{strut_model, StrutCall, StrutModel};
+pub use tables::{strut_table, tpms_table};
 
 use microfrep_hyperfun::library::{add_extension, Registry};
 

@@ -22,17 +22,22 @@ fn seed(a: &Arg) -> Result<u64, Output> {
     }
 }
 
+/// The point, the part and the seed of a pore call.
+fn common(a: &[Arg]) -> Result<([Expr; 3], Expr, u64), Output> {
+    let x = three(&a[0], "x")?;
+    let part = a[1].real();
+    if part.as_const().is_some() {
+        return Err(Output::error(
+            "the part F must be an expression of the coordinates (the model must lower \
+             to a graph; `microfrep check` says which path it takes)",
+        ));
+    }
+    Ok((x, part, seed(&a[4])?))
+}
+
 fn build(a: &[Arg], dim: Dim) -> Output {
     crate::args::out(|| {
-        let x = three(&a[0], "x")?;
-        let part = a[1].real();
-        if part.as_const().is_some() {
-            return Err(Output::error(
-                "the part F must be an expression of the coordinates (the model must lower \
-                 to a graph; `microfrep check` says which path it takes)",
-            ));
-        }
-        let seed = seed(&a[4])?;
+        let (x, part, seed) = common(a)?;
         let bounds = part_bounds(&part).map_err(|e| Output::error(e.to_string()))?;
         let opts = match dim {
             Dim::Two => Options::two_d(),
@@ -51,6 +56,39 @@ fn build(a: &[Arg], dim: Dim) -> Output {
     })
 }
 
+/// `mfPoreField(x, F, size, porosity, seed, box)`: the pore field alone
+/// (positive in the solid, negative in the pores) of the 3D structure built
+/// for the part `F` with its cells laid on `box = [x0, y0, z0, x1, y1, z1]`
+/// (the part's exact box, as `microfrep fill` writes it), not on the
+/// part's proven bounds.
+fn pore_field(a: &[Arg]) -> Output {
+    crate::args::out(|| {
+        let (x, part, seed) = common(a)?;
+        let b = a[5].array();
+        if b.len() != 6 {
+            return Err(Output::error(format!(
+                "box must be an array of 6 numbers [x0, y0, z0, x1, y1, z1], not {}",
+                b.len()
+            )));
+        }
+        let mut v = [0.0; 6];
+        for (i, e) in b.iter().enumerate() {
+            v[i] = e.as_const().ok_or_else(Output::needs_constants)?;
+        }
+        let bounds = [[v[0], v[1], v[2]], [v[3], v[4], v[5]]];
+        let built = Pores::build(
+            &part,
+            bounds,
+            Spec::from(a[2].real()),
+            Spec::from(a[3].real()),
+            seed,
+            &Options::default(),
+        )
+        .map_err(|e| Output::error(e.to_string()))?;
+        Ok(Output::value(Expr::field_at(built.field, x)))
+    })
+}
+
 /// `mfPores(x, F, size, porosity, seed)`.
 fn pores3(a: &[Arg]) -> Output {
     build(a, Dim::Three)
@@ -64,4 +102,5 @@ fn pores2(a: &[Arg]) -> Output {
 pub(crate) fn register(r: &mut Registry) {
     r.register("mfpores", &[A, R, R, R, R], pores3);
     r.register("mfpores2", &[A, R, R, R, R], pores2);
+    r.register("mfporefield", &[A, R, R, R, R, A], pore_field);
 }
