@@ -18,7 +18,8 @@ Loading: :func:`load` (HyperFun files, meshes, scans, examples),
 with R-function ``alpha``, blends, primitives (:func:`sphere`, :func:`box`,
 :func:`cylinder`, :func:`torus`, :func:`half_space`, :func:`ellipsoid`),
 TPMS (:func:`tpms`, :func:`gyroid`, ...), strut lattices (:func:`struts`,
-:func:`octet`, ...), irregular pores (:func:`pores`) and :func:`fill`;
+:func:`octet`, ...), irregular pores (:func:`pores`) and :func:`fill` (the
+CLI's fill, measured with :func:`fill_report`);
 expressions of :data:`x`, :data:`y`, :data:`z` for graded fields. Work:
 ``Shape.eval / eval_grid / gradient / attributes / mesh / mesh_to_file /
 slice / slice_to / render / analyze``. Distributed slicing and analysis:
@@ -62,7 +63,9 @@ from ._model import (
     examples,
     exp,
     fcc,
+    FilledModel,
     fill,
+    fill_report,
     fischer_koch_s,
     floor,
     from_expr,

@@ -1,6 +1,6 @@
 """Types of the extension module (the Rust side; use the package's API)."""
 
-from typing import Optional, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -106,7 +106,40 @@ def strut_solid(kind: str, cell: Expr, r: Expr) -> Expr: ...
 def tpms_level(kind: str, solid: str, density: float) -> float: ...
 def strut_radius(kind: str, density: float) -> float: ...
 def graded_level(family: str, kind: str, density: Expr, solid: str = "network") -> Expr: ...
-def pores_fill(part: Expr, lo: Vec3, hi: Vec3, cell: float, density: float, seed: int) -> Tuple[Expr, int, int, int]: ...
+class Filled:
+    model: Shape
+    core: Shape
+    infill: Shape
+    skin: Optional[Shape]
+    notes: List[str]
+    structure: str
+    design: Tuple[Optional[float], Optional[Tuple[int, int]]]
+    binding: Optional[Tuple[str, str]]
+    def hyperfun(self) -> str: ...
+    def measure(
+        self,
+        voxels_across: Optional[float] = None,
+        min_boxes: Optional[int] = None,
+        max_boxes: Optional[int] = None,
+        target_error: Optional[float] = None,
+        thickness_boxes: Optional[int] = None,
+        connectivity_voxels: Optional[int] = None,
+        rays: Optional[int] = None,
+    ) -> str: ...
+
+def fill_part(
+    part: Shape,
+    structure: str,
+    cell: float,
+    sheet: bool = False,
+    density: Optional[float] = None,
+    density_field: Optional[Expr] = None,
+    density_text: Optional[str] = None,
+    grade: Optional[Tuple[float, float, float]] = None,
+    skin: Optional[float] = None,
+    seed: int = 1,
+    bounds: Optional[Box3] = None,
+) -> Filled: ...
 def eval_points_par(
     shape: Shape, x: npt.NDArray[np.float32], y: npt.NDArray[np.float32], z: npt.NDArray[np.float32]
 ) -> npt.NDArray[np.float32]: ...

@@ -897,15 +897,135 @@ diamond = _struts_named("diamond")
 
 
 @_recorded
-def pores(part: Shape, cell: float, density: float, seed: int = 1, bounds: Optional[Box] = None) -> Shape:
+def pores(part: Shape, cell: float, density: Field, seed: int = 1, bounds: Optional[Box] = None) -> "FilledModel":
     """Irregular pores (Kou and Tan) in ``part``: cells of edge ``cell``,
     each with a pore made so that the part keeps relative density
-    ``density``; ``seed`` fixes the randomness. ``bounds`` default to the
-    part's."""
-    p = _shape(part)
-    lo, hi = _box(bounds) if bounds is not None else p.bounds()
-    e, _, _, _ = _core.pores_fill(p.value._e, lo, hi, float(cell), float(density), int(seed))
-    return Shape(_core.shape(e).with_bounds(lo, hi))
+    ``density`` (a number, or an expression for graded pores); ``seed``
+    fixes the randomness. ``bounds`` default to the part's. The same as
+    ``fill(part, "irregular", cell, density, seed=seed)``."""
+    return fill(part, "irregular", cell, density, seed=seed, bounds=bounds)
+
+
+class FilledModel(Shape):
+    """What :func:`fill` returns: the filled model, a :class:`Shape` like
+    any other (evaluate, mesh, slice, analyze it), that also holds the fill
+    it was built from: :meth:`report` measures it as ``microfrep fill``
+    does, :meth:`hyperfun` writes it as ``microfrep fill -o model.hf``."""
+
+    __slots__ = ("_filled",)
+
+    def __init__(self, filled: "_core.Filled"):
+        super().__init__(filled.model)
+        self._filled = filled
+
+    @property
+    def notes(self) -> list:
+        """Warnings of the part and the fill."""
+        return list(self._filled.notes)
+
+    @property
+    def structure(self) -> str:
+        """The structure's name as the CLI prints it ('gyroid sheet', ...)."""
+        return self._filled.structure
+
+    @property
+    def design(self) -> dict:
+        """Designed sizes known in closed form: ``strut_radius`` (a
+        constant-density strut lattice) and ``pores`` / ``dropped_cells``
+        (irregular pores), else None."""
+        r, p = self._filled.design
+        return {
+            "strut_radius": r,
+            "pores": None if p is None else p[0],
+            "dropped_cells": None if p is None else p[1],
+        }
+
+    @property
+    def binding(self) -> Optional[Tuple[str, str]]:
+        """``(name, source)`` to bind when loading :meth:`hyperfun`'s text
+        (``mf.load(path, fields=[binding])``) for a mesh or scan part."""
+        b = self._filled.binding
+        return None if b is None else tuple(b)
+
+    @property
+    def core(self) -> Shape:
+        """The part below the skin (the part itself without a skin)."""
+        return _fill_component(self, "core")
+
+    @property
+    def infill(self) -> Shape:
+        """The structure alone inside the core."""
+        return _fill_component(self, "infill")
+
+    @property
+    def skin(self) -> Optional[Shape]:
+        """The skin alone, or None."""
+        return None if self._filled.skin is None else _fill_component(self, "skin")
+
+    def hyperfun(self) -> str:
+        """The model as HyperFun source, the text ``microfrep fill ... -o
+        model.hf`` writes: loading it gives the same values (a mesh or scan
+        part is called as ``part(x)``: bind it with :attr:`binding`)."""
+        return self._filled.hyperfun()
+
+    def report(
+        self,
+        voxels_across: Optional[float] = None,
+        min_boxes: Optional[int] = None,
+        max_boxes: Optional[int] = None,
+        target_error: Optional[float] = None,
+        thickness_boxes: Optional[int] = None,
+        connectivity_voxels: Optional[int] = None,
+        rays: Optional[int] = None,
+    ) -> dict:
+        """Measures what was built, as ``microfrep fill`` does (the same
+        defaults): infill density with its error, skin thickness along
+        normals, thinnest wall or strut and pore size (local thickness),
+        solid components, open pores and whether the skin seals them. The
+        dict has the keys of ``microfrep fill --json`` except ``output`` and
+        ``written``; ``measured`` says where and at what voxel it measured
+        and how long it took (``seconds``)."""
+        s = self._filled.measure(
+            voxels_across=None if voxels_across is None else float(voxels_across),
+            min_boxes=None if min_boxes is None else int(min_boxes),
+            max_boxes=None if max_boxes is None else int(max_boxes),
+            target_error=None if target_error is None else float(target_error),
+            thickness_boxes=None if thickness_boxes is None else int(thickness_boxes),
+            connectivity_voxels=None if connectivity_voxels is None else int(connectivity_voxels),
+            rays=None if rays is None else int(rays),
+        )
+        return json.loads(s)
+
+
+@_recorded
+def _fill_component(model: FilledModel, which: str) -> Shape:
+    return Shape(getattr(model._filled, which))
+
+
+def fill_report(model: FilledModel, **options) -> dict:
+    """The measured report of a filled model: ``model.report(**options)``
+    (see :meth:`FilledModel.report`)."""
+    if not isinstance(model, FilledModel):
+        raise _core.InputError(
+            f"fill_report takes what mf.fill (or mf.pores) returned, got {type(model).__name__}"
+        )
+    return model.report(**options)
+
+
+def _grade(g) -> Tuple[float, float, float]:
+    """``(surface, inner, depth)``, or a dict with those keys."""
+    if isinstance(g, dict):
+        keys = {"surface", "inner", "depth"}
+        if set(g) != keys:
+            raise _core.InputError(f"grade: a dict with the keys surface, inner, depth, got {sorted(g)}")
+        g = (g["surface"], g["inner"], g["depth"])
+    try:
+        t = tuple(float(v) for v in g)
+    except (TypeError, ValueError):
+        raise _core.InputError(f"grade: (surface, inner, depth) numbers, got {g!r}") from None
+    if len(t) != 3:
+        raise _core.InputError(f"grade: (surface, inner, depth), got {g!r}")
+    return t
 
 
 @_recorded
@@ -913,37 +1033,79 @@ def fill(
     part: Shape,
     structure: str,
     cell: Field,
-    density: Field,
+    density: Any = None,
     skin: Optional[float] = None,
     solid: str = "network",
-) -> Shape:
-    """``part`` filled with a microstructure of volume fraction ``density``
-    (a number or an expression for grading): ``structure`` is a TPMS
-    (:data:`TPMS_KINDS`), a strut lattice (:data:`STRUT_KINDS`) or
-    'irregular' (Kou-Tan pores). With ``skin``, a solid wall of that
-    thickness (in the part's value, a distance for meshes and scans) is
-    kept inside the part's surface."""
+    seed: int = 1,
+    grade=None,
+    bounds: Optional[Box] = None,
+) -> FilledModel:
+    """``part`` filled with a microstructure, as ``microfrep fill`` builds
+    it (the one fill of the library: the same model and the same values).
+
+    ``structure``: a TPMS (gyroid, schwarz-p, schwarz-d, neovius, iwp or
+    schoen-iwp, fks or fischer-koch-s; ``solid='sheet'`` for the sheet), a
+    strut lattice (sc, bcc, fcc, octet, kelvin, diamond), 'rods', 'pores'
+    (spherical) or 'irregular' (Kou-Tan pores, ``seed`` fixes them).
+    ``cell``: the cell size (millimetres). ``density``: the volume fraction
+    of the structure in the core, a number, an expression of x, y, z (an
+    :class:`Expr`), a HyperFun expression text of ``x[1..3]`` and ``d``
+    (the depth below the part's surface, such as ``"0.2 + 0.01 * d"``), or
+    a grade ``(surface, inner, depth)`` (also as ``grade=``, or a dict
+    with those keys): ``surface`` just below the skin, ``inner`` from
+    ``depth`` further in. ``skin``: a solid wall of that thickness in
+    millimetres (a true distance for every part: a mesh's or scan's
+    distance, a Newton estimate of it for a formula). ``bounds`` replace
+    the part's box.
+
+    Returns a :class:`FilledModel`: the model on the part's box, with
+    :meth:`~FilledModel.report` (the measured figures) and
+    :meth:`~FilledModel.hyperfun`."""
     p = _shape(part)
-    s = structure.replace("_", "-")
-    if s == "irregular":
-        if not isinstance(density, (int, float)):
-            raise _core.InputError("fill: 'irregular' takes a constant density")
-        body = pores(p, float(cell), float(density))
-    elif s in TPMS_KINDS:
-        body = p & tpms(s, cell, density=density, solid=solid)
-    elif s in STRUT_KINDS:
-        body = p & struts(s, cell, density=density)
+    if solid not in ("network", "sheet"):
+        raise _core.InputError(f"fill: solid '{solid}' (network, sheet)")
+    if isinstance(cell, Expr):
+        c = cell._e.as_const()
+        if c is None:
+            raise _core.InputError("fill: cell must be a number (one cell size for the whole part)")
+    elif isinstance(cell, (int, float, np.floating, np.integer)) and not isinstance(cell, bool):
+        c = float(cell)
     else:
+        raise _core.InputError(f"fill: cell must be a number, got {type(cell).__name__}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise _core.InputError(f"fill: seed {seed!r} must be a whole number from 0 to 2^53")
+    kw: dict = {}
+    if grade is not None:
+        if density is not None:
+            raise _core.InputError("fill: give density or grade, not both")
+        kw["grade"] = _grade(grade)
+    elif density is None:
         raise _core.InputError(
-            f"fill: unknown structure '{structure}' (TPMS: {', '.join(TPMS_KINDS)}; "
-            f"struts: {', '.join(STRUT_KINDS)}; irregular)"
+            "fill: give a density (a number, an expression, a HyperFun expression text of x[1..3] "
+            "and d) or grade=(surface, inner, depth)"
         )
+    elif isinstance(density, str):
+        kw["density_text"] = density
+    elif isinstance(density, (dict, tuple, list)):
+        kw["grade"] = _grade(density)
+    elif isinstance(density, (int, float, np.floating, np.integer)) and not isinstance(density, bool):
+        kw["density"] = float(density)
+    elif isinstance(density, (Expr, Shape)):
+        kw["density_field"] = _expr(density)._e
+    else:
+        raise _core.InputError(f"fill: density must be a number, an Expr, a text or a grade, got {type(density).__name__}")
     if skin is not None:
-        if not float(skin) > 0:
-            raise _core.InputError(f"fill: skin {skin} must be > 0")
-        shell = p - offset(p, -float(skin))
-        body = shell | body
-    try:
-        return with_bounds(body, p.bounds())
-    except _core.BoundsError:
-        return body
+        if isinstance(skin, bool) or not isinstance(skin, (int, float, np.floating, np.integer)):
+            raise _core.InputError(f"fill: skin must be a thickness in millimetres, got {skin!r}")
+        skin = float(skin)
+    f = _core.fill_part(
+        p._s,
+        str(structure),
+        c,
+        sheet=solid == "sheet",
+        skin=skin,
+        seed=int(seed),
+        bounds=_box(bounds),
+        **kw,
+    )
+    return FilledModel(f)

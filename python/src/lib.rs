@@ -29,6 +29,7 @@ use pyo3::prelude::*;
 
 mod errors;
 mod fab;
+mod fill;
 mod model;
 mod parts;
 mod points;
@@ -106,5 +107,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     points::register(m)?;
     fab::register(m)?;
     parts::register(m)?;
+    fill::register(m)?;
     Ok(())
 }

@@ -598,30 +598,6 @@ fn graded_level(
     })
 }
 
-/// Kou-Tan irregular pores in `part` (cells of edge `cell`, relative
-/// density `density`): the porous part and (pores, dropped, regularized).
-#[pyfunction]
-fn pores_fill(
-    py: Python<'_>,
-    part: &PyExpr,
-    lo: [f64; 3],
-    hi: [f64; 3],
-    cell: f64,
-    density: f64,
-    seed: u64,
-) -> PyResult<(PyExpr, usize, usize, usize)> {
-    check_box(lo, hi)?;
-    check_density(density)?;
-    if !(cell > 0.0 && cell.is_finite()) {
-        return Err(errors::input(format!("cell {cell} must be > 0")));
-    }
-    let p = part.e.clone();
-    let (e, b) = py
-        .allow_threads(|| microfrep::pores::Pores::fill(&p, [lo, hi], cell, density, seed))
-        .map_err(errors::structure)?;
-    Ok((PyExpr { e }, b.pores, b.dropped, b.regularized))
-}
-
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyExpr>()?;
     m.add_class::<PyShape>()?;
@@ -643,6 +619,5 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tpms_level, m)?)?;
     m.add_function(wrap_pyfunction!(strut_radius, m)?)?;
     m.add_function(wrap_pyfunction!(graded_level, m)?)?;
-    m.add_function(wrap_pyfunction!(pores_fill, m)?)?;
     Ok(())
 }
