@@ -10,7 +10,10 @@
 //! `target/libigl-venv` (or `MICROFREP_LIBIGL_PYTHON`), created on first
 //! use; its columns read `na` if that fails. Last, `fill` end to end: a
 //! 100k-triangle torus part filled with a 2 mm gyroid and meshed at 0.1 mm
-//! to STL (target under 30 s), with its peak memory.
+//! to STL (target under 30 s), with its peak memory; and the README's femur
+//! job, `microfrep fill` against the script a user would write with libigl,
+//! NumPy, scikit-image and trimesh (bench/fill_pipeline.py) at 256, 512 and
+//! 1024 cells (`fill_vs_pipeline_N`).
 
 use microfrep_core::Field;
 use microfrep_meshfield::bvh::Bvh;
@@ -43,7 +46,145 @@ pub fn run() -> Result<(), String> {
         eprintln!("bench/run parts: ../shared/meshes/femur.stl not found; query cases skipped");
     }
     build_1m(&pool)?;
-    fill_part(&pool, &dir)
+    fill_part(&pool, &dir)?;
+    fill_vs_pipeline(&dir)
+}
+
+/// The femur job of the README, `microfrep fill femur.stl --structure
+/// gyroid --cell 12 --density 0.3 --shell 2 --resolution N -o x.stl` (the
+/// whole process, its measured report included), against the script a
+/// user would write instead (bench/fill_pipeline.py: libigl's signed
+/// distance on a grid, a NumPy gyroid with the skin, scikit-image's
+/// marching cubes, trimesh's STL), run in the same bench, at N = 256, 512
+/// and 1024 cells on the longest side. `fill` refuses a resolution whose
+/// cells are more than half the skin or the thinnest wall measured; then
+/// it runs again with `--resolution auto` and the line gives both
+/// resolutions. The peer runs from `target/fill-peer-venv` (or
+/// `MICROFREP_FILL_PEER_PYTHON`), created on first use; its columns read
+/// `na` if that fails or if the grid would need more than half the memory.
+fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
+    let femur = Path::new("../shared/meshes/femur.stl");
+    if !femur.exists() {
+        eprintln!("bench/run parts: ../shared/meshes/femur.stl not found; fill_vs_pipeline skipped");
+        return Ok(());
+    }
+    let spec = microfrep::io::pyvenv::PythonSpec {
+        override_var: "MICROFREP_FILL_PEER_PYTHON",
+        venv: Path::new("target/fill-peer-venv"),
+        check: "import igl, numpy, skimage, trimesh",
+        packages: &["libigl", "numpy", "scikit-image", "trimesh"],
+        log: &dir.join("fill-peer-install.log"),
+    };
+    let python = microfrep::io::pyvenv::python_with(&spec)
+        .map_err(|e| eprintln!("bench/run parts: the fill peer is not available ({e}); its columns read na"))
+        .ok();
+    let cli = cli_binary()?;
+    let mesh = read_mesh(femur).map_err(|e| e.to_string())?;
+    let [lo, hi] = mesh.bbox();
+    let size: [f64; 3] = std::array::from_fn(|a| hi[a] - lo[a]);
+    let longest = size.iter().copied().fold(0.0, f64::max);
+    let out = dir.join("femur_fill.stl");
+    let peer_out = dir.join("femur_peer.stl");
+    for n in [256usize, 512, 1024] {
+        // The peer's grid: about 7 float32 volumes alive at its peak.
+        let h = longest / n as f64;
+        let nodes: f64 = size.iter().map(|s| (s / h).ceil() + 5.0).product();
+        let fits = nodes * 4.0 * 7.0 < 0.5 * microfrep::io::limits::memory_limit().unwrap_or(f64::INFINITY);
+        let peer = match (&python, fits) {
+            (Some(py), true) => {
+                let t = Instant::now();
+                let o = Command::new(py)
+                    .arg("bench/fill_pipeline.py")
+                    .arg(femur)
+                    .args([n.to_string(), "12".into(), "0.3".into(), "2".into()])
+                    .arg(&peer_out)
+                    .output()
+                    .map_err(|e| e.to_string())?;
+                let s = t.elapsed().as_secs_f64();
+                if o.status.success() {
+                    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+                    Some((s, j))
+                } else {
+                    eprintln!(
+                        "bench/run parts: the fill peer failed at {n}: {}",
+                        String::from_utf8_lossy(&o.stderr)
+                    );
+                    None
+                }
+            }
+            (Some(_), false) => {
+                eprintln!("bench/run parts: the fill peer at {n} would need more than half the memory; na");
+                None
+            }
+            (None, _) => None,
+        };
+        let _ = std::fs::remove_file(&peer_out);
+        let run = |res: &str| -> Result<(f64, Option<serde_json::Value>, String), String> {
+            let _ = std::fs::remove_file(&out);
+            let t = Instant::now();
+            let o = Command::new(&cli)
+                .arg("fill")
+                .arg(femur)
+                .args(["--structure", "gyroid", "--cell", "12", "--density", "0.3", "--shell", "2"])
+                .args(["--resolution", res, "--json", "-o"])
+                .arg(&out)
+                .output()
+                .map_err(|e| e.to_string())?;
+            let s = t.elapsed().as_secs_f64();
+            let j = o
+                .status
+                .success()
+                .then(|| serde_json::from_slice(&o.stdout).ok())
+                .flatten();
+            Ok((s, j, String::from_utf8_lossy(&o.stderr).into_owned()))
+        };
+        let (mut fill_s, mut j, why) = run(&n.to_string())?;
+        let mut refused_s = None;
+        if j.is_none() {
+            eprintln!("bench/run parts: fill --resolution {n} refused ({}); again with auto", why.trim());
+            refused_s = Some(fill_s);
+            (fill_s, j, _) = run("auto")?;
+        }
+        let _ = std::fs::remove_file(&out);
+        let Some(j) = j else {
+            eprintln!("bench/run parts: fill of the femur failed at {n}");
+            continue;
+        };
+        let num = |v: &serde_json::Value| v.as_f64().map_or("na".to_string(), |x| format!("{x}"));
+        let peer_s = peer.as_ref().map(|p| p.0);
+        println!(
+            "RESULT fill_vs_pipeline_{n} part=femur structure=gyroid cell_mm=12 density=0.3 skin_mm=2 \
+             pipeline_resolution={n} pipeline_s={} pipeline_sd_s={} pipeline_triangles={} \
+             fill_resolution={} fill_s={fill_s:.2} ratio={} report_s={} fill_triangles={} \
+             measured_density={} measured_skin_min={} refused_{n}_s={}",
+            fmt(peer_s, 2),
+            peer.as_ref().map_or("na".into(), |p| fmt(p.1["steps"]["signed_distance"].as_f64(), 2)),
+            peer.as_ref().map_or("na".into(), |p| num(&p.1["triangles"])),
+            num(&j["written"]["resolution"]),
+            fmt(peer_s.map(|p| p / fill_s), 2),
+            fmt(j["measured"]["seconds"].as_f64(), 2),
+            num(&j["written"]["triangles"]),
+            fmt(j["density"]["measured"].as_f64(), 4),
+            fmt(j["skin"]["min"].as_f64(), 3),
+            fmt(refused_s, 2),
+        );
+    }
+    Ok(())
+}
+
+/// The CLI binary beside this one (target/release/microfrep), built first
+/// so it is the current code.
+fn cli_binary() -> Result<PathBuf, String> {
+    let ok = Command::new("cargo")
+        .args(["build", "--quiet", "--release", "-p", "microfrep-cli"])
+        .status()
+        .is_ok_and(|s| s.success());
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let cli = exe.with_file_name("microfrep");
+    if !ok || !cli.exists() {
+        return Err(format!("cannot build the CLI ({})", cli.display()));
+    }
+    Ok(cli)
 }
 
 /// The main job end to end on a part of about 100k triangles: a torus
@@ -53,7 +194,7 @@ pub fn run() -> Result<(), String> {
 /// --structure gyroid --cell 2 --density 0.3 --shell 0.3 --voxel 0.1 -o
 /// OUT.stl` does (figures excluded). Target: under 30 s.
 fn fill_part(pool: &rayon::ThreadPool, dir: &Path) -> Result<(), String> {
-    use microfrep::fill::{fill, Density, FillOptions, Structure};
+    use microfrep::fill::{fill, Density, FillOptions, Part, Structure};
     use microfrep::mesh::job::{mesh_to_file, JobOptions};
     use microfrep::mesh::{Grid, MeshOptions};
     use microfrep_shapes as prims;
@@ -91,18 +232,20 @@ fn fill_part(pool: &rayon::ThreadPool, dir: &Path) -> Result<(), String> {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
     let t = Instant::now();
     let (filled_s, m) = pool.install(|| -> Result<_, String> {
-        let f = fill(
+        let progress = |_: &str, _: u64, _: u64| {};
+        let p = Part::load(
             part.to_str().ok_or("path")?,
-            &Default::default(),
-            &opts,
-            &|_, _, _| {},
+            &microfrep::LoadOptions::default(),
+            None,
+            &progress,
         )
         .map_err(|e| e.to_string())?;
+        let f = fill(&p, &opts, &progress).map_err(|e| e.to_string())?;
         let filled_s = t.elapsed().as_secs_f64();
-        let b = f.model.shape.bounds().map_err(|e| e.to_string())?.corners();
+        let b = f.bounds.corners();
         let n = Grid::resolution_for_voxel(b, 0.1).map_err(|e| e.to_string())?;
         let m = mesh_to_file(
-            &f.model.shape,
+            &f.model,
             &MeshOptions::new(b, n),
             &out,
             &JobOptions::default(),
