@@ -12,7 +12,15 @@
 //! always one of the files a run reported.
 //!
 //! Inputs are protected: paths given to [`register_input`] (the model, a
-//! mesh, a scan) cannot be the target of an output of the same run.
+//! mesh, a scan, and every file one of them names: a detached NRRD data
+//! file, the members of a DICOM series, the files of a TIFF stack, a data
+//! field's CSV) cannot be the target of an output of the same run, under
+//! any name (the same file by another path, a symbolic or a hard link).
+//!
+//! A failed commit leaves nothing behind: the temporary and its scratch
+//! files are removed. Several files committed as one output
+//! ([`commit_all`]) either all replace their targets or leave every old
+//! target as it was.
 //!
 //! A file that outgrows [`AtomicFile`]'s 4 MiB buffer before any seek or
 //! flush goes on, on Linux, with direct I/O from a writer thread of its
@@ -37,8 +45,8 @@ mod direct;
 
 /// Temporaries being written: (owner id, path, is a directory).
 static LIVE: Mutex<Vec<(u64, PathBuf, bool)>> = Mutex::new(Vec::new());
-/// Canonical paths of this run's inputs.
-static INPUTS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// This run's inputs: canonical path, and (device, inode) where known.
+static INPUTS: Mutex<Vec<(PathBuf, Option<(u64, u64)>)>> = Mutex::new(Vec::new());
 static SEQ: AtomicU64 = AtomicU64::new(1);
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -51,7 +59,46 @@ const BUFFER: usize = 4 << 20;
 /// Declares `path` an input of this run: no output may replace it.
 pub fn register_input(path: &Path) {
     if let Ok(c) = fs::canonicalize(path) {
-        lock(&INPUTS).push(c);
+        let id = file_id(&c);
+        let mut inputs = lock(&INPUTS);
+        if !inputs.iter().any(|(p, _)| *p == c) {
+            inputs.push((c, id));
+        }
+    }
+}
+
+/// Declares every path of `paths` an input (see [`register_input`]).
+pub fn register_inputs<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) {
+    for p in paths {
+        register_input(p.as_ref());
+    }
+}
+
+/// Whether `path` is a registered input (under any name).
+pub fn is_input(path: &Path) -> bool {
+    let Some(c) = canonical_target(path) else {
+        return false;
+    };
+    let id = file_id(&c);
+    // By inode only while the input still is that file: a removed input's
+    // inode may be reused by a new file.
+    lock(&INPUTS)
+        .iter()
+        .any(|(p, i)| *p == c || (id.is_some() && *i == id && file_id(p) == id))
+}
+
+/// The (device, inode) pair of an existing file: the same file whatever
+/// path or hard link names it.
+fn file_id(path: &Path) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        None
     }
 }
 
@@ -88,12 +135,10 @@ fn canonical_target(target: &Path) -> Option<PathBuf> {
 
 /// Refuses a target that is one of the registered inputs.
 pub fn check_not_input(target: &Path) -> Result<()> {
-    if let Some(c) = canonical_target(target) {
-        if lock(&INPUTS).contains(&c) {
-            return Err(IoError::WouldOverwriteInput {
-                path: target.to_path_buf(),
-            });
-        }
+    if is_input(target) {
+        return Err(IoError::WouldOverwriteInput {
+            path: target.to_path_buf(),
+        });
     }
     Ok(())
 }
@@ -151,6 +196,8 @@ pub struct AtomicFile {
     plain: Vec<u8>,
     id: u64,
     scratch: u64,
+    /// Renamed onto the target: nothing is left to remove.
+    placed: bool,
 }
 
 /// Space for the next bytes of an [`AtomicFile`], lent by
@@ -218,6 +265,7 @@ impl AtomicFile {
             plain: Vec::new(),
             id,
             scratch: 0,
+            placed: false,
         })
     }
 
@@ -376,8 +424,17 @@ impl AtomicFile {
         }
     }
 
-    /// Flushes, syncs and renames the file onto its target.
+    /// Flushes, syncs and renames the file onto its target. If any step
+    /// fails, the temporary is removed and the target is as it was.
     pub fn commit(mut self) -> Result<()> {
+        self.seal()?;
+        self.place()
+    }
+
+    /// Everything of a commit but the rename: the bytes are flushed and
+    /// synced to the temporary. On an error the file stays uncommitted
+    /// (dropping it removes the temporary).
+    fn seal(&mut self) -> Result<()> {
         if let Err(e) = self.not_lent() {
             return Err(self.err(e));
         }
@@ -389,10 +446,13 @@ impl AtomicFile {
             #[cfg(target_os = "linux")]
             Out::Direct(mut d) => d.finish(),
         };
-        let res = file
-            .and_then(|f| f.sync_all())
-            .and_then(|_| fs::rename(&self.temp, &self.target));
-        res.map_err(|e| self.err(e))?;
+        file.and_then(|f| f.sync_all()).map_err(|e| self.err(e))
+    }
+
+    /// Renames the sealed temporary onto the target.
+    fn place(&mut self) -> Result<()> {
+        fs::rename(&self.temp, &self.target).map_err(|e| self.err(e))?;
+        self.placed = true;
         // Renamed: only the scratch files are left to remove.
         let rest: Vec<_> = unregister(self.id)
             .into_iter()
@@ -436,7 +496,8 @@ impl Drop for AtomicFile {
     fn drop(&mut self) {
         // Dropping the writer first: a direct writer's thread is joined
         // before its file is removed.
-        if self.file.take().is_some() {
+        drop(self.file.take());
+        if !self.placed {
             remove_all(&unregister(self.id));
         }
     }
@@ -529,19 +590,83 @@ pub fn write_file(target: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Commits several files as one output (a `.raw` and its `.json` sidecar):
-/// if a later rename fails, the files already renamed are removed again, so
-/// either all targets are new or none is left from this run.
-pub fn commit_all(files: Vec<AtomicFile>) -> Result<()> {
-    let mut done: Vec<PathBuf> = Vec::new();
-    for f in files {
-        let target = f.target().to_path_buf();
-        if let Err(e) = f.commit() {
-            for d in &done {
-                let _ = fs::remove_file(d);
-            }
-            return Err(e);
+/// either every target is replaced by its new file, or every target is
+/// left as it was (an old file kept, a missing one still missing) and no
+/// temporary remains.
+///
+/// All files are synced first, and every target is checked to be a file
+/// or absent, so most failures happen before anything is renamed. Each
+/// existing target is then kept under a backup name (a hard link, so it
+/// never goes missing; where the file system has none, a rename) until
+/// all renames have succeeded; if one fails, the targets already replaced
+/// get their backups back.
+pub fn commit_all(mut files: Vec<AtomicFile>) -> Result<()> {
+    for f in &mut files {
+        f.seal()?;
+    }
+    for f in &files {
+        if fs::symlink_metadata(&f.target).is_ok_and(|m| m.is_dir()) {
+            return Err(f.err(std::io::Error::other(
+                "the target is a directory; nothing was replaced",
+            )));
         }
-        done.push(target);
+    }
+    // (backup path, whether the target was moved rather than linked).
+    let mut backups: Vec<Option<(PathBuf, bool)>> = Vec::with_capacity(files.len());
+    let restore = |files: &[AtomicFile], backups: &[Option<(PathBuf, bool)>], placed: usize| {
+        for (k, (f, b)) in files.iter().zip(backups).enumerate() {
+            match b {
+                Some((b, moved)) if k < placed || *moved => {
+                    if fs::rename(b, &f.target).is_err() {
+                        // The backup is now the only copy of the old file:
+                        // it stays, whatever happens to the writer.
+                        lock(&LIVE).retain(|(_, p, _)| p != b);
+                    }
+                }
+                Some((b, _)) => {
+                    let _ = fs::remove_file(b);
+                }
+                None if k < placed => {
+                    let _ = fs::remove_file(&f.target);
+                }
+                None => {}
+            }
+        }
+    };
+    for f in &mut files {
+        if fs::symlink_metadata(&f.target).is_err() {
+            backups.push(None);
+            continue;
+        }
+        f.scratch += 1;
+        let b = temp_for(&f.target, f.id, f.scratch, false)?;
+        let kept = match fs::hard_link(&f.target, &b) {
+            Ok(()) => Ok(false),
+            Err(_) => fs::rename(&f.target, &b).map(|_| true),
+        };
+        match kept {
+            Ok(moved) => backups.push(Some((b, moved))),
+            Err(e) => {
+                restore(&files, &backups, 0);
+                return Err(files[backups.len()].err(e));
+            }
+        }
+    }
+    for k in 0..files.len() {
+        if let Err(e) = fs::rename(&files[k].temp, &files[k].target) {
+            restore(&files, &backups, k);
+            return Err(files[k].err(e));
+        }
+    }
+    // All replaced: the backups go (they are scratch files of their
+    // writers), the temporaries are now the targets.
+    for f in &mut files {
+        f.placed = true;
+        let rest: Vec<_> = unregister(f.id)
+            .into_iter()
+            .filter(|(p, _)| *p != f.temp)
+            .collect();
+        remove_all(&rest);
     }
     Ok(())
 }
@@ -744,6 +869,139 @@ mod tests {
         a.commit().unwrap();
         assert_eq!(fs::read(&t).unwrap(), b"first");
         assert_eq!(entries(&d), vec!["m.stl".to_string()]);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// What a directory holds: names and contents of its plain files,
+    /// `/` for a subdirectory.
+    fn contents(d: &Path) -> Vec<(String, Vec<u8>)> {
+        let mut v: Vec<_> = fs::read_dir(d)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                let name = e.file_name().to_string_lossy().into_owned();
+                let body = if e.path().is_dir() { b"/".to_vec() } else { fs::read(e.path()).unwrap() };
+                (name, body)
+            })
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_failed_commit_leaves_no_temporary() {
+        // The case: the target is a directory, so the rename fails
+        // after everything was written; also with scratch files and past
+        // the buffer (direct writes).
+        let d = dir("failed-commit");
+        for (k, n) in [10usize, (5 << 20) + 3].into_iter().enumerate() {
+            let t = d.join(format!("o{k}.stl"));
+            fs::create_dir(&t).unwrap();
+            fs::write(t.join("inside"), b"keep").unwrap();
+            let mut f = AtomicFile::create(&t).unwrap();
+            f.write_all(&pattern(n)).unwrap();
+            fs::write(f.scratch_path(), b"scratch").unwrap();
+            assert!(f.commit().is_err());
+            assert_eq!(entries(&d).len(), k + 1, "{:?}", entries(&d));
+            assert_eq!(fs::read(t.join("inside")).unwrap(), b"keep");
+        }
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_multi_file_output_replaces_all_its_targets_or_none() {
+        // The case first: an old x.raw, x.json a directory.
+        let d = dir("commit-all");
+        let raw = d.join("x.raw");
+        fs::write(&raw, b"precious").unwrap();
+        fs::create_dir(d.join("x.json")).unwrap();
+        let mut a = AtomicFile::create(&raw).unwrap();
+        a.write_all(b"new raw").unwrap();
+        let mut b = AtomicFile::create(&d.join("x.json")).unwrap();
+        b.write_all(b"{}").unwrap();
+        assert!(commit_all(vec![a, b]).is_err());
+        assert_eq!(fs::read(&raw).unwrap(), b"precious");
+        assert_eq!(entries(&d), vec!["x.json".to_string(), "x.raw".to_string()]);
+        fs::remove_dir_all(&d).unwrap();
+        // Every mix of 1 to 4 targets, each absent, an old file or a
+        // directory (whose rename fails), in every order: a directory
+        // anywhere leaves everything as it was, else all are new.
+        for n in 1..=4usize {
+            for mix in 0..3usize.pow(n as u32) {
+                let d = dir(&format!("commit-all-{n}-{mix}"));
+                let kinds: Vec<usize> = (0..n).map(|k| mix / 3usize.pow(k as u32) % 3).collect();
+                let targets: Vec<PathBuf> = (0..n).map(|k| d.join(format!("t{k}.out"))).collect();
+                for (t, kind) in targets.iter().zip(&kinds) {
+                    match kind {
+                        1 => fs::write(t, format!("old {}", t.display())).unwrap(),
+                        2 => fs::create_dir(t).unwrap(),
+                        _ => {}
+                    }
+                }
+                let before = contents(&d);
+                let files: Vec<AtomicFile> = targets
+                    .iter()
+                    .map(|t| {
+                        let mut f = AtomicFile::create(t).unwrap();
+                        f.write_all(format!("new {}", t.display()).as_bytes()).unwrap();
+                        f
+                    })
+                    .collect();
+                let r = commit_all(files);
+                if kinds.contains(&2) {
+                    assert!(r.is_err(), "{kinds:?}");
+                    assert_eq!(contents(&d), before, "{kinds:?}");
+                } else {
+                    r.unwrap();
+                    for t in &targets {
+                        assert_eq!(fs::read(t).unwrap(), format!("new {}", t.display()).as_bytes());
+                    }
+                    assert_eq!(entries(&d).len(), n, "{kinds:?}: {:?}", entries(&d));
+                }
+                fs::remove_dir_all(&d).unwrap();
+            }
+        }
+    }
+
+    #[test]
+    fn a_rename_failing_midway_restores_the_targets_already_replaced() {
+        // A failure the checks before the renames cannot see: the second
+        // temporary disappears (as on a file system that loses it), so its
+        // rename fails after the first target was replaced.
+        let d = dir("commit-all-midway");
+        let (t0, t1) = (d.join("a.raw"), d.join("a.json"));
+        fs::write(&t0, b"old raw").unwrap();
+        fs::write(&t1, b"old json").unwrap();
+        let mut a = AtomicFile::create(&t0).unwrap();
+        a.write_all(b"new raw").unwrap();
+        let mut b = AtomicFile::create(&t1).unwrap();
+        b.write_all(b"new json").unwrap();
+        b.seal().unwrap();
+        fs::remove_file(&b.temp).unwrap();
+        assert!(commit_all(vec![a, b]).is_err());
+        assert_eq!(fs::read(&t0).unwrap(), b"old raw");
+        assert_eq!(fs::read(&t1).unwrap(), b"old json");
+        assert_eq!(entries(&d).len(), 2, "{:?}", entries(&d));
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn inputs_are_protected_under_any_name() {
+        let d = dir("input-names");
+        let data = d.join("ball.raw");
+        fs::write(&data, b"scan").unwrap();
+        register_inputs([&data]);
+        std::os::unix::fs::symlink(&data, d.join("sym.raw")).unwrap();
+        fs::hard_link(&data, d.join("hard.raw")).unwrap();
+        for name in ["ball.raw", "sym.raw", "hard.raw", "./ball.raw"] {
+            let e = AtomicFile::create(&d.join(name)).err();
+            assert!(matches!(e, Some(IoError::WouldOverwriteInput { .. })), "{name}");
+        }
+        let e = AtomicDir::create(&data).err();
+        assert!(matches!(e, Some(IoError::WouldOverwriteInput { .. })));
+        assert_eq!(fs::read(&data).unwrap(), b"scan");
+        // Another file is fine.
+        write_file(&d.join("other.raw"), b"x").unwrap();
         fs::remove_dir_all(&d).unwrap();
     }
 
