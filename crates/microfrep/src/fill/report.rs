@@ -4,7 +4,7 @@
 //! - **Voxel size.** The thinnest designed feature `f` (the strut diameter
 //!   where it is known in closed form, else the 10th percentile of the
 //!   wall thickness measured in a pilot cell at a 32nd of the cell; the skin
-//!   if thinner) sets the voxel: `f / voxels_across` (default 10).
+//!   if thinner) sets the voxel: `f / voxels_across` (default 14).
 //! - **Density.** Cubes of one cell side, their centres on a fixed
 //!   low-discrepancy sequence over the part's box grown by half a cube, so
 //!   every point of the core is equally likely to be covered: the density
@@ -12,10 +12,14 @@
 //!   cubes, its error twice the ratio estimator's standard error plus the
 //!   measurement error of the volumes. Cubes are added (up to
 //!   `max_boxes`) until the error is below `target_error`.
-//! - **Thinnest wall or strut, pore size.** The local thickness (largest
-//!   ball, exact distance transform) of the solid and of the pores in the
-//!   density cubes that lie wholly inside the core; the minimum, its
-//!   place, the 10th percentile and the mean.
+//! - **Thinnest wall or strut, pore size.** In the density cubes that lie
+//!   wholly inside the core: the thinnest is the 1st percentile of the
+//!   inscribed diameters `2 sqrt(D)` on the ridge of the exact distance
+//!   transform (a plate of n voxels reads n or n + 1, a cylinder of d
+//!   voxels about d - 0.8: within a voxel, so 14 voxels across the
+//!   thinnest feature keep it within 7 %), at its place; the 10th percentile and the mean are those of
+//!   the local thickness (largest ball containing each voxel, the
+//!   convention of BoneJ and PoreSpy).
 //! - **Skin.** Rays along the inward normal from points on the part's
 //!   surface, through the skin alone, to where it ends (bisected): minimum
 //!   and mean over the rays.
@@ -55,7 +59,7 @@ pub struct MeasureOptions {
 impl Default for MeasureOptions {
     fn default() -> Self {
         MeasureOptions {
-            voxels_across: 10.0,
+            voxels_across: 14.0,
             min_boxes: 12,
             max_boxes: 48,
             target_error: 0.006,
@@ -209,7 +213,7 @@ pub fn measure(
         inf.push(m.volume.value);
         core.push(m.region_volume.value);
         meas_err += m.volume.error() + m.region_volume.error();
-        if interior.len() < opts.thickness_boxes && wholly_inside(&f.core, b) {
+        if interior.len() < opts.thickness_boxes && wholly_inside(&f.core, &grown(b, 0.25)) {
             interior.push(*b);
         }
         if inf.len() >= opts.min_boxes {
@@ -358,6 +362,16 @@ fn place_boxes(f: &Filled, side: f64, max: usize) -> Vec<[[f64; 3]; 2]> {
     out
 }
 
+/// The cube `b` grown by `k` of its side on every face (the padded grid
+/// the thickness is measured on).
+fn grown(b: &[[f64; 3]; 2], k: f64) -> [[f64; 3]; 2] {
+    let pad = k * (b[1][0] - b[0][0]);
+    [
+        std::array::from_fn(|a| b[0][a] - pad),
+        std::array::from_fn(|a| b[1][a] + pad),
+    ]
+}
+
 /// Whether the core holds the whole cube (all of a 5^3 lattice of its
 /// points inside, with the interval bound where it is tight).
 fn wholly_inside(core: &Shape, b: &[[f64; 3]; 2]) -> bool {
@@ -388,63 +402,107 @@ fn thickness(
     voxel: f64,
     progress: Progress,
 ) -> Result<(Option<ThicknessFigure>, Option<ThicknessFigure>), FillError> {
-    // Per phase: every cube's grid and thickness field (diameters in mm).
-    let mut fields: [Vec<(Grid, Vec<f32>)>; 2] = [Vec::new(), Vec::new()];
+    let mut phases = [Phase::default(), Phase::default()];
     for (k, b) in boxes.iter().enumerate() {
         progress("measuring walls and pores", k as u64, boxes.len() as u64);
         // Measured in the cube grown by a quarter cell, kept in the cube:
         // a wall cut by the grid's edge reads thin there (its largest
         // balls are centred outside).
-        let pad = 0.25 * (b[1][0] - b[0][0]);
-        let lo: [f64; 3] = std::array::from_fn(|a| b[0][a] - pad);
-        let hi: [f64; 3] = std::array::from_fn(|a| b[1][a] + pad);
-        let grid = Grid::with_voxel([lo, hi], voxel).map_err(err)?;
-        let h = grid.voxel_size() as f32;
+        let grid = Grid::with_voxel(grown(b, 0.25), voxel).map_err(err)?;
         let labels = Sampler::new(&f.model, None, grid.clone()).all(&|_, _| {});
-        let [nx, ny, _] = grid.dims;
         for (slot, phase) in [(0, SOLID), (1, PORE)] {
-            let mut t = local_thickness_field(&labels, grid.dims, phase).map_err(err)?;
-            for (i, v) in t.iter_mut().enumerate() {
-                let c = grid.center([i % nx, (i / nx) % ny, i / (nx * ny)]);
-                let inside = (0..3).all(|a| c[a] >= b[0][a] && c[a] <= b[1][a]);
-                *v = if inside { *v * h } else { 0.0 };
-            }
-            fields[slot].push((grid.clone(), t));
+            phases[slot].add(&grid, &labels, phase, b)?;
         }
     }
-    Ok((figure(&fields[0]), figure(&fields[1])))
+    let [a, b] = phases;
+    Ok((a.figure(), b.figure()))
 }
 
-/// The thinnest, 10th percentile and mean of the positive finite values
-/// of the fields. The thinnest is the 1st percentile (a lone voxel at a
-/// sharp edge reads one or two voxels whatever the wall), placed at a
-/// voxel of that thickness.
-fn figure(fields: &[(Grid, Vec<f32>)]) -> Option<ThicknessFigure> {
-    let ok = |v: f32| v > 0.0 && v.is_finite();
-    let mut all: Vec<f32> = fields
-        .iter()
-        .flat_map(|(_, t)| t.iter().copied().filter(|&v| ok(v)))
-        .collect();
-    if all.is_empty() {
-        return None;
+/// One phase's measurements over the cubes.
+#[derive(Default)]
+struct Phase {
+    /// Local thickness (largest ball) of every voxel, mm.
+    local: Vec<f32>,
+    /// Inscribed diameters on the ridge of the distance transform, mm,
+    /// with their places.
+    ridge: Vec<(f32, [f64; 3])>,
+}
+
+impl Phase {
+    fn add(
+        &mut self,
+        grid: &Grid,
+        labels: &[u8],
+        phase: u8,
+        keep: &[[f64; 3]; 2],
+    ) -> Result<(), FillError> {
+        use microfrep_analysis::thickness::edt::{edt_squared, INF};
+        let h = grid.voxel_size();
+        let [nx, ny, nz] = grid.dims;
+        let inside = |i: usize| {
+            let c = grid.center([i % nx, (i / nx) % ny, i / (nx * ny)]);
+            (0..3).all(|a| c[a] >= keep[0][a] && c[a] <= keep[1][a])
+        };
+        let t = local_thickness_field(labels, grid.dims, phase).map_err(err)?;
+        for (i, &v) in t.iter().enumerate() {
+            if v > 0.0 && v.is_finite() && inside(i) {
+                self.local.push((v as f64 * h) as f32);
+            }
+        }
+        // The ridge: voxels whose squared distance to the other phase is
+        // at least their 26 neighbours'. There the inscribed ball's
+        // diameter is 2 sqrt(D) voxels (a plate of n voxels reads n or
+        // n + 1, a cylinder of d voxels about d - 0.8), without the
+        // largest-ball rule's readings of one or two voxels at curved
+        // surfaces and edges.
+        let d = edt_squared(labels, grid.dims, |l| l == phase);
+        let at = |x: usize, y: usize, z: usize| d[x + nx * (y + ny * z)];
+        for z in 1..nz.saturating_sub(1) {
+            for y in 1..ny - 1 {
+                for x in 1..nx - 1 {
+                    let v = at(x, y, z);
+                    if v == 0 || v == INF {
+                        continue;
+                    }
+                    let i = x + nx * (y + ny * z);
+                    let mut top = true;
+                    'n: for dz in 0..3 {
+                        for dy in 0..3 {
+                            for dx in 0..3 {
+                                if at(x + dx - 1, y + dy - 1, z + dz - 1) > v {
+                                    top = false;
+                                    break 'n;
+                                }
+                            }
+                        }
+                    }
+                    if top && inside(i) {
+                        let dia = 2.0 * (v as f64).sqrt() * h;
+                        self.ridge.push((dia as f32, grid.center([x, y, z])));
+                    }
+                }
+            }
+        }
+        Ok(())
     }
-    all.sort_by(f32::total_cmp);
-    let mean = all.iter().map(|&v| v as f64).sum::<f64>() / all.len() as f64;
-    let m = all[all.len() / 100];
-    let at = fields
-        .iter()
-        .find_map(|(g, t)| {
-            let i = t.iter().position(|&v| v == m)?;
-            let [nx, ny, _] = g.dims;
-            Some(g.center([i % nx, (i / nx) % ny, i / (nx * ny)]))
+
+    /// The thinnest (the 1st percentile of the ridge diameters, at its
+    /// place), and the 10th percentile and mean of the local thickness.
+    fn figure(mut self) -> Option<ThicknessFigure> {
+        if self.local.is_empty() || self.ridge.is_empty() {
+            return None;
+        }
+        self.local.sort_by(f32::total_cmp);
+        self.ridge.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mean = self.local.iter().map(|&v| v as f64).sum::<f64>() / self.local.len() as f64;
+        let (m, at) = self.ridge[self.ridge.len() / 100];
+        Some(ThicknessFigure {
+            min: m as f64,
+            at,
+            p10: self.local[self.local.len() / 10] as f64,
+            mean,
         })
-        .unwrap_or([f64::NAN; 3]);
-    Some(ThicknessFigure {
-        min: m as f64,
-        at,
-        p10: all[all.len() / 10] as f64,
-        mean,
-    })
+    }
 }
 
 /// Skin thickness along inward normals from points on the part's surface.

@@ -1,0 +1,241 @@
+//! The typed fill: every structure on a HyperFun part and on a mesh part
+//! builds, stays inside the part, writes HyperFun that loads back to the
+//! same values; a skin is a true distance on a non-distance part; the
+//! measured report agrees with independent measurements.
+
+use microfrep::fill::{fill, Density, FillOptions, MeasureOptions, Part, Structure};
+use microfrep::{load, Bounds, LoadOptions};
+use std::path::PathBuf;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mf-fill-api-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// hfSphere of radius `r`: `r^2 - |x|^2`, not a distance.
+fn sphere_hf(d: &std::path::Path, r: f64) -> String {
+    let p = d.join("sphere.hf");
+    std::fs::write(
+        &p,
+        format!(
+            "my_model(x[3], a[1]) {{\n  array c[3];\n  c = [0, 0, 0];\n  my_model = hfSphere(x, c, {r});\n}}\n"
+        ),
+    )
+    .unwrap();
+    p.display().to_string()
+}
+
+/// A closed, outward-wound cube mesh of side `s` at the origin corner.
+fn cube_stl(d: &std::path::Path, s: f64) -> String {
+    let p = d.join("cube.stl");
+    let v = |i: usize| -> [f64; 3] { [s * (i & 1) as f64, s * (i >> 1 & 1) as f64, s * (i >> 2 & 1) as f64] };
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut t = String::from("solid cube\n");
+    for q in quads {
+        for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            t.push_str("facet normal 0 0 0\nouter loop\n");
+            for i in tri {
+                let c = v(i);
+                t.push_str(&format!("vertex {} {} {}\n", c[0], c[1], c[2]));
+            }
+            t.push_str("endloop\nendfacet\n");
+        }
+    }
+    t.push_str("endsolid cube\n");
+    std::fs::write(&p, t).unwrap();
+    p.display().to_string()
+}
+
+fn quiet(_: &str, _: u64, _: u64) {}
+
+fn random_points(b: Bounds, n: usize, seed: u64) -> Vec<[f64; 3]> {
+    let mut s = seed;
+    let mut next = || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| std::array::from_fn(|a| b.min[a] + next() * (b.max[a] - b.min[a])))
+        .collect()
+}
+
+#[test]
+fn every_structure_on_a_hyperfun_and_a_mesh_part_reloads_from_its_hyperfun() {
+    let d = dir("matrix");
+    let sphere = sphere_hf(&d, 10.0);
+    let cube = cube_stl(&d, 16.0);
+    for (spec, cell) in [(sphere.as_str(), 4.0), (cube.as_str(), 4.0)] {
+        let part = Part::load(spec, &LoadOptions::default(), None, &quiet).unwrap();
+        for s in Structure::all() {
+            let density = match s {
+                Structure::Pores => 0.7,
+                _ => 0.3,
+            };
+            let mut opts = FillOptions::new(s, cell, density);
+            opts.skin = Some(1.0);
+            let f = fill(&part, &opts, &quiet).unwrap_or_else(|e| panic!("{spec} {}: {e}", s.name()));
+            let text = f.hyperfun().unwrap_or_else(|e| panic!("{}: {e}", s.name()));
+            let hf = d.join("model.hf");
+            std::fs::write(&hf, &text).unwrap();
+            let lo = LoadOptions {
+                fields: f.binding().into_iter().collect(),
+                ..Default::default()
+            };
+            let back = load::load(&hf.display().to_string(), &lo)
+                .unwrap_or_else(|e| panic!("{} reload: {e}\n{}", s.name(), &text[..text.len().min(2000)]));
+            let mut a = f.model.point();
+            let mut b = back.shape.point();
+            let mut part_ev = f.part.point();
+            let mut worst: f64 = 0.0;
+            for p in random_points(f.bounds, 1000, 7) {
+                let (va, vb) = (a.eval(p), b.eval(p));
+                // Inside the fill only where inside the part.
+                if va >= 0.0 {
+                    assert!(part_ev.eval(p) >= -1e-9, "{}: solid outside the part at {p:?}", s.name());
+                }
+                if f.binding().is_none() {
+                    assert!(
+                        va == vb || (va - vb).abs() <= 1e-9 * va.abs().max(1.0),
+                        "{} at {p:?}: {va} in process, {vb} from the .hf",
+                        s.name()
+                    );
+                } else {
+                    // A mesh part reloads with its exact distance, where the
+                    // fill samples it on a grid of an eighth of a cell.
+                    worst = worst.max((va - vb).abs().min(1.0));
+                }
+            }
+            // Half the sampling step (the trilinear error at the cube's edges).
+    assert!(worst < 0.25, "{}: mesh part reload differs by {worst}", s.name());
+        }
+    }
+}
+
+#[test]
+fn a_one_millimetre_skin_on_a_quadratic_ball_is_one_millimetre() {
+    // hfSphere is r^2 - |x|^2; its normalised function never exceeds 1, so
+    // a skin measured in it would fill the ball (the old fill's bug).
+    let d = dir("skin");
+    let sphere = sphere_hf(&d, 10.0);
+    let part = Part::load(&sphere, &LoadOptions::default(), None, &quiet).unwrap();
+    assert!(!part.distance);
+    let mut opts = FillOptions::new(
+        Structure::Tpms {
+            kind: microfrep::structures::tpms::Tpms::Gyroid,
+            sheet: false,
+        },
+        4.0,
+        0.3,
+    );
+    opts.skin = Some(1.0);
+    let f = fill(&part, &opts, &quiet).unwrap();
+    // Independently: the skin is solid from r = 9 to 10, the core starts
+    // at 9 (closed form), at points along random directions.
+    let mut m = f.model.point();
+    let mut core = f.core.point();
+    for (k, p) in random_points(Bounds::new([-1.0; 3], [1.0; 3]), 200, 3).iter().enumerate() {
+        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        if n < 1e-3 {
+            continue;
+        }
+        let at = |r: f64| -> [f64; 3] { std::array::from_fn(|a| p[a] / n * r) };
+        for r in [9.05, 9.5, 9.95] {
+            assert!(m.eval(at(r)) > 0.0, "{k}: skin not solid at r = {r}");
+        }
+        assert!(core.eval(at(8.95)) > 0.0 && core.eval(at(9.05)) < 0.0, "{k}: core edge");
+    }
+    let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
+    let s = r.skin.clone().unwrap();
+    assert!((s.mean - 1.0).abs() < 0.02 && s.min > 0.97, "{s:?}");
+    assert_eq!(s.unbounded, 0);
+    // Density against the closed form of the core volume and an
+    // independent fine measurement of the infill inside it.
+    let grid = microfrep::analysis::Grid::new([[-9.0; 3], [9.0; 3]], 192).unwrap();
+    let m = microfrep::analysis::measure(&f.infill, Some(&f.core), &grid, &|_, _| {});
+    let core_closed = 4.0 / 3.0 * std::f64::consts::PI * 729.0;
+    assert!((m.region_volume.value - core_closed).abs() < 0.005 * core_closed);
+    let independent = m.volume.value / m.region_volume.value;
+    assert!(
+        (r.density.value - independent).abs() <= r.density.error.max(0.002) && r.density.error < 0.015,
+        "reported {} ± {}, measured {independent}",
+        r.density.value,
+        r.density.error
+    );
+    assert_eq!(r.sealed, Some(true));
+    assert_eq!(r.connectivity.as_ref().unwrap().open_fraction, 0.0);
+}
+
+#[test]
+fn struts_report_their_designed_diameter_and_graded_density_follows_depth() {
+    let d = dir("struts");
+    let cube = cube_stl(&d, 24.0);
+    let part = Part::load(&cube, &LoadOptions::default(), None, &quiet).unwrap();
+    assert!(part.distance);
+    let k = microfrep::structures::struts::StrutLattice::Octet;
+    let f = fill(&part, &FillOptions::new(Structure::Struts(k), 4.0, 0.2), &quiet).unwrap();
+    let rad = f.design.strut_radius.unwrap();
+    let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
+    let t = r.thinnest.clone().unwrap();
+    assert!((t.min - 2.0 * rad).abs() < 0.1 * 2.0 * rad, "{t:?} vs diameter {}", 2.0 * rad);
+    assert!((r.density.value - 0.2).abs() < 0.01, "{:?}", r.density);
+    // Graded: 0.15 at the surface to 0.45 from 6 mm in.
+    let mut opts = FillOptions::new(
+        Structure::Tpms {
+            kind: microfrep::structures::tpms::Tpms::Gyroid,
+            sheet: false,
+        },
+        3.0,
+        0.3,
+    );
+    opts.density = Density::Graded {
+        at_surface: 0.15,
+        at_depth: 0.45,
+        depth: 6.0,
+    };
+    let g = fill(&part, &opts, &quiet).unwrap();
+    let mut rho = microfrep::Shape::new(g.density.clone()).point();
+    assert!((rho.eval([12.0, 12.0, 0.5]) - (0.15 + 0.3 * 0.5 / 6.0)).abs() < 0.01);
+    assert!((rho.eval([12.0, 12.0, 12.0]) - 0.45).abs() < 1e-9);
+    // An expression of the depth, and one out of range refused.
+    opts.density = Density::Expression("0.2 + 0.02 * d".into());
+    let e = fill(&part, &opts, &quiet).unwrap();
+    let mut rho = microfrep::Shape::new(e.density.clone()).point();
+    assert!((rho.eval([12.0, 12.0, 2.0]) - 0.24).abs() < 1e-3);
+    opts.density = Density::Expression("2".into());
+    let err = fill(&part, &opts, &quiet).err().unwrap().to_string();
+    assert!(err.contains("between 0 and 1"), "{err}");
+    opts.density = Density::Expression("0.3 +".into());
+    let err = fill(&part, &opts, &quiet).err().unwrap().to_string();
+    assert!(err.contains("--density-expr") && !err.contains("/tmp"), "{err}");
+}
+
+#[test]
+fn irregular_pores_follow_the_parts_box_and_oversized_cells_are_refused() {
+    let d = dir("pores");
+    let cube = cube_stl(&d, 10.0);
+    let part = Part::load(&cube, &LoadOptions::default(), None, &quiet).unwrap();
+    let f = fill(&part, &FillOptions::new(Structure::Irregular, 2.0, 0.45), &quiet).unwrap();
+    let (made, _) = f.design.pores.unwrap();
+    // The octree halves the cube's own box until cells are at most 2 mm:
+    // 8 x 8 x 8 cells of 1.25 mm, every one in the part.
+    assert_eq!(made, 512);
+    let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
+    assert!((r.density.value - 0.45).abs() < 0.01 + r.density.error, "{:?}", r.density);
+    let err = fill(&part, &FillOptions::new(Structure::Irregular, 50.0, 0.3), &quiet)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("larger than the part"), "{err}");
+    let mut o = FillOptions::new(Structure::Irregular, 2.0, 0.3);
+    o.seed = 1 << 60;
+    assert!(fill(&part, &o, &quiet).is_err());
+}
