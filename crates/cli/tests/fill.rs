@@ -1,6 +1,6 @@
-//! `microfrep fill`: a sphere mesh filled with a gyroid network at 30 %
-//! with a skin; measured density, skin thickness, watertight output; the
-//! HyperFun form reloads to the same model.
+//! `microfrep fill` end to end: a HyperFun ball with a 1 mm skin (its value
+//! is no distance) measures a 1 mm skin and writes two shells; bad requests
+//! are refused with nothing written and name only options `fill` has.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -16,152 +16,64 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
-fn run(args: &[&str]) -> serde_json::Value {
-    let out = Command::new(bin()).args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap_or(serde_json::Value::Null)
+fn ball(d: &std::path::Path) -> String {
+    let p = d.join("ball.hf");
+    std::fs::write(
+        &p,
+        "my_model(x[3], a[1]) {\n  array c[3];\n  c = [0, 0, 0];\n  my_model = hfSphere(x, c, 10);\n}\n",
+    )
+    .unwrap();
+    p.display().to_string()
 }
 
 #[test]
-fn sphere_mesh_with_a_gyroid_at_30_percent_and_a_skin() {
-    let d = dir("sphere");
-    let part = d.join("ball.stl");
-    let part = part.to_str().unwrap();
-    run(&[
-        "mesh",
-        "sphere",
-        "-o",
-        part,
-        "--resolution",
-        "96",
-        "--quiet",
-    ]);
-    let out = d.join("filled.stl");
-    let r = run(&[
-        "fill",
-        part,
-        "-o",
-        out.to_str().unwrap(),
-        "--structure",
-        "gyroid",
-        "--cell",
-        "0.25",
-        "--density",
-        "0.3",
-        "--shell",
-        "0.05",
-        "--resolution",
-        "128",
-        "--json",
-    ]);
-    let rho = r["density"]["measured"].as_f64().unwrap();
-    assert!((rho - 0.3).abs() / 0.3 < 0.01, "{r}");
-    // Half a voxel of the 128 grid over the ball's box (side 2).
-    let skin = r["skin"]["measured"].as_f64().unwrap();
-    assert!((skin - 0.05).abs() < 0.5 * 2.0 / 128.0, "{r}");
-    assert_eq!(r["written"]["bad_edges"], 0, "{r}");
-    assert_eq!(r["solid_components"], 1, "{r}");
-    // A closed skin: no pore reaches the part's outside.
-    assert!(r["open_pore_fraction"].as_f64().unwrap() < 1e-6, "{r}");
-
-    // The HyperFun form, with its binding, is the same model.
-    let hf = d.join("filled.hf");
-    run(&[
-        "fill",
-        part,
-        "-o",
-        hf.to_str().unwrap(),
-        "--structure",
-        "gyroid",
-        "--cell",
-        "0.25",
-        "--density",
-        "0.3",
-        "--shell",
-        "0.05",
-        "--quiet",
-    ]);
-    let text = std::fs::read_to_string(&hf).unwrap();
-    assert!(text.contains("--field part="), "{text}");
-    let field = format!("part={part}");
-    let out = Command::new(bin())
-        .args([
-            "eval",
-            hf.to_str().unwrap(),
-            "--field",
-            &field,
-            "0",
-            "0",
-            "0",
-            "0.99",
-            "0",
-            "0",
-            "2",
-            "0",
-            "0",
-        ])
+fn a_hyperfun_ball_with_a_one_millimetre_skin() {
+    let d = dir("ball");
+    let part = ball(&d);
+    let out = d.join("f.stl");
+    let o = Command::new(bin())
+        .args(["fill", &part, "--structure", "gyroid", "--cell", "4", "--density", "0.3", "--shell", "1", "--json", "-o"])
+        .arg(&out)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Vec<f64> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| l.parse().unwrap())
-        .collect();
-    // In the skin, outside the part.
-    assert!(v[1] > 0.0 && v[2] < 0.0, "{v:?}");
-    let _ = std::fs::remove_dir_all(&d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mean = j["skin"]["mean"].as_f64().unwrap();
+    assert!((mean - 1.0).abs() < 0.05, "{j}");
+    assert!(j["written"]["shells"].as_u64().unwrap() >= 2, "{j}");
+    let rho = j["density"]["measured"].as_f64().unwrap();
+    assert!((rho - 0.3).abs() < 0.02, "{j}");
+    assert_eq!(j["connectivity"]["sealed_by_skin"], serde_json::json!(true));
+    assert!(out.exists());
 }
 
 #[test]
-fn a_hyperfun_part_with_struts_and_bad_requests() {
-    let d = dir("hf");
-    let out = d.join("f.stl");
-    let r = run(&[
-        "fill",
-        "../../examples/pasko_fig3a_sphere_shell_lattice.hf",
-        "-o",
-        out.to_str().unwrap(),
-        "--structure",
-        "octet",
-        "--cell",
-        "0.3",
-        "--density",
-        "0.2",
-        "--resolution",
-        "96",
-        "--json",
-    ]);
-    let rho = r["density"]["measured"].as_f64().unwrap();
-    assert!((rho - 0.2).abs() < 0.02, "{r}");
-    assert_eq!(r["written"]["bad_edges"], 0, "{r}");
-    for (args, msg) in [
-        (
-            vec!["--structure", "nope", "--density", "0.3"],
-            "unknown structure",
-        ),
-        (
-            vec!["--structure", "gyroid", "--density", "1.5"],
-            "between 0 and 1",
-        ),
-        (
-            vec!["--structure", "pores", "--density", "0.2"],
-            "out of range",
-        ),
+fn bad_requests_write_nothing_and_advise_real_options() {
+    let d = dir("bad");
+    let part = ball(&d);
+    let help = Command::new(bin()).args(["fill", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout).to_string();
+    for (extra, out) in [
+        (vec!["--density", "0.3"], "x.xyz"),
+        (vec!["--density", "0.3", "--resolution", "8", "--shell", "1"], "y.stl"),
+        (vec!["--density-expr", "2"], "z.stl"),
+        (vec!["--density", "0.3", "--seed", "18014398509481984"], "s.stl"),
     ] {
-        let mut a = vec!["fill", "sphere", "-o", "/tmp/x.stl", "--cell", "0.3"];
-        a.extend(args);
-        let o = Command::new(bin()).args(&a).output().unwrap();
-        assert!(!o.status.success());
-        let e = String::from_utf8_lossy(&o.stderr);
-        assert!(e.contains(msg), "{a:?}: {e}");
+        let target = d.join(out);
+        let o = Command::new(bin())
+            .args(["fill", &part, "--structure", "gyroid", "--cell", "4"])
+            .args(&extra)
+            .arg("-o")
+            .arg(&target)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(!o.status.success(), "{extra:?} {out}");
+        assert!(!target.exists(), "{extra:?}: wrote {out}");
+        assert!(!err.contains("/tmp/microfrep-fill"), "{err}");
+        for w in err.split_whitespace().filter(|w| w.starts_with("--")) {
+            let opt: String = w.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '-').collect();
+            assert!(help.contains(&opt), "{err}: advises {opt}, which fill lacks");
+        }
     }
-    let _ = std::fs::remove_dir_all(&d);
 }
