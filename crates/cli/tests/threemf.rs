@@ -51,7 +51,7 @@ fn strut_fill_is_a_beam_lattice_and_triangles_on_request() {
         "--density",
         "0.2",
         "--resolution",
-        "48",
+        "72",
         "--json",
     ]))
     .unwrap();
@@ -87,7 +87,7 @@ fn strut_fill_is_a_beam_lattice_and_triangles_on_request() {
         "--density",
         "0.2",
         "--resolution",
-        "48",
+        "72",
         "--triangles",
         "--quiet",
     ]);

@@ -647,6 +647,20 @@ fn connectivity(
 /// Shells (connected pieces of surface: triangles sharing a vertex) of the
 /// mesh file at `path`, its vertices welded where they coincide exactly.
 pub fn mesh_shells(path: &std::path::Path) -> Result<usize, FillError> {
+    let is_3mf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("3mf"));
+    if is_3mf {
+        let meshes = microfrep_3mf::read_meshes(path).map_err(err)?;
+        return Ok(meshes
+            .iter()
+            .map(|m| {
+                let t = microfrep_meshfield::TriMesh::new(m.vertices.clone(), m.triangles.clone());
+                t.map(|t| shell_count(t.weld(0.0).0.vertices.len(), &t.weld(0.0).0.triangles))
+                    .unwrap_or(0)
+            })
+            .sum());
+    }
     let m = microfrep_meshfield::read::read_mesh(path).map_err(err)?;
     let (m, _) = m.weld(0.0);
     Ok(shell_count(m.vertices.len(), &m.triangles))
