@@ -65,7 +65,9 @@ pub fn run() -> Result<(), String> {
 fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
     let femur = Path::new("../shared/meshes/femur.stl");
     if !femur.exists() {
-        eprintln!("bench/run parts: ../shared/meshes/femur.stl not found; fill_vs_pipeline skipped");
+        eprintln!(
+            "bench/run parts: ../shared/meshes/femur.stl not found; fill_vs_pipeline skipped"
+        );
         return Ok(());
     }
     let spec = microfrep::io::pyvenv::PythonSpec {
@@ -76,7 +78,9 @@ fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
         log: &dir.join("fill-peer-install.log"),
     };
     let python = microfrep::io::pyvenv::python_with(&spec)
-        .map_err(|e| eprintln!("bench/run parts: the fill peer is not available ({e}); its columns read na"))
+        .map_err(|e| {
+            eprintln!("bench/run parts: the fill peer is not available ({e}); its columns read na")
+        })
         .ok();
     let cli = cli_binary()?;
     let mesh = read_mesh(femur).map_err(|e| e.to_string())?;
@@ -89,7 +93,8 @@ fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
         // The peer's grid: about 7 float32 volumes alive at its peak.
         let h = longest / n as f64;
         let nodes: f64 = size.iter().map(|s| (s / h).ceil() + 5.0).product();
-        let fits = nodes * 4.0 * 7.0 < 0.5 * microfrep::io::limits::memory_limit().unwrap_or(f64::INFINITY);
+        let fits = nodes * 4.0 * 7.0
+            < 0.5 * microfrep::io::limits::memory_limit().unwrap_or(f64::INFINITY);
         let peer = match (&python, fits) {
             (Some(py), true) => {
                 let t = Instant::now();
@@ -102,7 +107,8 @@ fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
                     .map_err(|e| e.to_string())?;
                 let s = t.elapsed().as_secs_f64();
                 if o.status.success() {
-                    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+                    let j: serde_json::Value =
+                        serde_json::from_slice(&o.stdout).unwrap_or_default();
                     Some((s, j))
                 } else {
                     eprintln!(
@@ -125,7 +131,16 @@ fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
             let o = Command::new(&cli)
                 .arg("fill")
                 .arg(femur)
-                .args(["--structure", "gyroid", "--cell", "12", "--density", "0.3", "--shell", "2"])
+                .args([
+                    "--structure",
+                    "gyroid",
+                    "--cell",
+                    "12",
+                    "--density",
+                    "0.3",
+                    "--shell",
+                    "2",
+                ])
                 .args(["--resolution", res, "--json", "-o"])
                 .arg(&out)
                 .output()
@@ -141,7 +156,10 @@ fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
         let (mut fill_s, mut j, why) = run(&n.to_string())?;
         let mut refused_s = None;
         if j.is_none() {
-            eprintln!("bench/run parts: fill --resolution {n} refused ({}); again with auto", why.trim());
+            eprintln!(
+                "bench/run parts: fill --resolution {n} refused ({}); again with auto",
+                why.trim()
+            );
             refused_s = Some(fill_s);
             (fill_s, j, _) = run("auto")?;
         }

@@ -6,7 +6,9 @@
 use crate::common::{num, parse_box, ModelArgs, RunArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use microfrep::fill::{fill, Density, FillOptions, FillReport, Filled, MeasureOptions, Part, Structure};
+use microfrep::fill::{
+    fill, Density, FillOptions, FillReport, Filled, MeasureOptions, Part, Structure,
+};
 use microfrep::{Bounds, LoadOptions};
 use std::path::{Path, PathBuf};
 
@@ -225,7 +227,9 @@ pub fn run(a: FillArgs) -> Result<()> {
                 point(&t.at)
             );
             match a.thin {
-                ThinAction::Refuse => bail!("{msg}; nothing written (--thin warn writes it anyway)"),
+                ThinAction::Refuse => {
+                    bail!("{msg}; nothing written (--thin warn writes it anyway)")
+                }
                 ThinAction::Warn => eprintln!("warning: {msg}"),
             }
         }
@@ -270,8 +274,7 @@ pub fn run(a: FillArgs) -> Result<()> {
                 "bytes": file_size(&a.output),
             });
             if let Some(v) = &volume {
-                let res =
-                    crate::mesh_cmd::apply_volume(v, &a.output, &f.model, b, &a.run)?;
+                let res = crate::mesh_cmd::apply_volume(v, &a.output, &f.model, b, &a.run)?;
                 j["volumetric"] = crate::mesh_cmd::volume_json(&res);
             }
             j
@@ -320,9 +323,10 @@ fn mesh_resolution(a: &FillArgs, f: &Filled, r: &FillReport, b: Bounds) -> Resul
     let need = (2.0 * longest / t).ceil() as usize;
     let asked = match (a.resolution.as_deref(), a.voxel) {
         (Some("auto") | None, None) => None,
-        (Some(s), _) => Some(s.parse::<usize>().map_err(|_| {
-            anyhow::anyhow!("--resolution '{s}': a cell count or 'auto'")
-        })?),
+        (Some(s), _) => Some(
+            s.parse::<usize>()
+                .map_err(|_| anyhow::anyhow!("--resolution '{s}': a cell count or 'auto'"))?,
+        ),
         (None, Some(v)) => Some(microfrep::mesh::Grid::resolution_for_voxel(b.corners(), v)?),
     };
     let _ = f;
@@ -391,7 +395,12 @@ fn mesh_checked(
     Ok((s, shells))
 }
 
-fn report_json(a: &FillArgs, f: &Filled, r: &FillReport, written: serde_json::Value) -> serde_json::Value {
+fn report_json(
+    a: &FillArgs,
+    f: &Filled,
+    r: &FillReport,
+    written: serde_json::Value,
+) -> serde_json::Value {
     let t = |t: &Option<microfrep::fill::report::ThicknessFigure>| {
         t.as_ref().map(|t| {
             serde_json::json!({ "min": t.min, "at": t.at, "p10": t.p10, "mean": t.mean, "error": r.voxel })

@@ -32,7 +32,20 @@ fn a_hyperfun_ball_with_a_one_millimetre_skin() {
     let part = ball(&d);
     let out = d.join("f.stl");
     let o = Command::new(bin())
-        .args(["fill", &part, "--structure", "gyroid", "--cell", "4", "--density", "0.3", "--shell", "1", "--json", "-o"])
+        .args([
+            "fill",
+            &part,
+            "--structure",
+            "gyroid",
+            "--cell",
+            "4",
+            "--density",
+            "0.3",
+            "--shell",
+            "1",
+            "--json",
+            "-o",
+        ])
         .arg(&out)
         .output()
         .unwrap();
@@ -51,13 +64,22 @@ fn a_hyperfun_ball_with_a_one_millimetre_skin() {
 fn bad_requests_write_nothing_and_advise_real_options() {
     let d = dir("bad");
     let part = ball(&d);
-    let help = Command::new(bin()).args(["fill", "--help"]).output().unwrap();
+    let help = Command::new(bin())
+        .args(["fill", "--help"])
+        .output()
+        .unwrap();
     let help = String::from_utf8_lossy(&help.stdout).to_string();
     for (extra, out) in [
         (vec!["--density", "0.3"], "x.xyz"),
-        (vec!["--density", "0.3", "--resolution", "8", "--shell", "1"], "y.stl"),
+        (
+            vec!["--density", "0.3", "--resolution", "8", "--shell", "1"],
+            "y.stl",
+        ),
         (vec!["--density-expr", "2"], "z.stl"),
-        (vec!["--density", "0.3", "--seed", "18014398509481984"], "s.stl"),
+        (
+            vec!["--density", "0.3", "--seed", "18014398509481984"],
+            "s.stl",
+        ),
     ] {
         let target = d.join(out);
         let o = Command::new(bin())
@@ -72,8 +94,14 @@ fn bad_requests_write_nothing_and_advise_real_options() {
         assert!(!target.exists(), "{extra:?}: wrote {out}");
         assert!(!err.contains("/tmp/microfrep-fill"), "{err}");
         for w in err.split_whitespace().filter(|w| w.starts_with("--")) {
-            let opt: String = w.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '-').collect();
-            assert!(help.contains(&opt), "{err}: advises {opt}, which fill lacks");
+            let opt: String = w
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
+                .collect();
+            assert!(
+                help.contains(&opt),
+                "{err}: advises {opt}, which fill lacks"
+            );
         }
     }
 }

@@ -192,12 +192,17 @@ fn shared_chain(kinds: &[Twice], n: usize) -> Expr {
             Twice::Sum => &v + &v,
             Twice::Min => v.min(&v),
             Twice::Select => Expr::select(Expr::y().gt(0.0), v.clone(), v.clone()),
-            Twice::Set => {
-                Expr::set(microfrep_core::SetOp::Union, &v, &v, alpha.clone())
-            }
+            Twice::Set => Expr::set(microfrep_core::SetOp::Union, &v, &v, alpha.clone()),
             Twice::Blend => Expr::blend(
                 microfrep_core::SetOp::Intersection,
-                [v.clone(), v.clone(), alpha.clone(), v.clone(), 1.0.into(), 1.0.into()],
+                [
+                    v.clone(),
+                    v.clone(),
+                    alpha.clone(),
+                    v.clone(),
+                    1.0.into(),
+                    1.0.into(),
+                ],
             ),
             Twice::PowOfItself => v.pow(&v),
         };
@@ -220,7 +225,10 @@ fn a_node_holding_its_child_twice_drops_without_recursing() {
         s = &s + &s;
     }
     // Still evaluable: 2^N overflows to infinity, the graph stays N nodes.
-    assert_eq!(PointEval::new(&Tape::new(&s)).eval([1.0, 0.0, 0.0]), f64::INFINITY);
+    assert_eq!(
+        PointEval::new(&Tape::new(&s)).eval([1.0, 0.0, 0.0]),
+        f64::INFINITY
+    );
     drop(s);
 }
 

@@ -12,9 +12,9 @@
 //! negative) or divides by a small non-constant: it reports an error there.
 
 use microfrep_core::{BinaryOp, Expr, ExprNode, Field, SetOp, UnaryOp};
-use std::sync::Arc;
 use std::collections::HashMap;
 use std::fmt::Write;
+use std::sync::Arc;
 
 /// Deeper text is moved into a temporary, keeping the parser's nesting low.
 const MAX_TEXT_DEPTH: usize = 24;

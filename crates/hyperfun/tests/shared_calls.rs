@@ -44,7 +44,11 @@ fn body(form: Form, callee: &str) -> String {
 fn chain(forms: &[Form], n: usize) -> String {
     let mut s = String::from("o0(x[3], a[1]) { o0 = 1 - x[1]*x[1] - x[2]*x[2] - x[3]*x[3]; }\n");
     for i in 1..n {
-        let name = if i + 1 == n { "my_model".to_string() } else { format!("o{i}") };
+        let name = if i + 1 == n {
+            "my_model".to_string()
+        } else {
+            format!("o{i}")
+        };
         let b = body(forms[i % forms.len()], &format!("o{}", i - 1));
         s += &format!("{name}(x[3], a[1]) {{ {b} {name} = r; }}\n");
     }
@@ -91,7 +95,13 @@ fn the_issue_example_18_objects_calling_the_previous_twice() {
 
 #[test]
 fn chains_of_increasing_length_stay_linear_in_size_and_time() {
-    let forms = [Form::SumScaled, Form::Union, Form::ViaVariables, Form::Branches, Form::Max];
+    let forms = [
+        Form::SumScaled,
+        Form::Union,
+        Form::ViaVariables,
+        Form::Branches,
+        Form::Max,
+    ];
     let mut last = 0;
     for n in [10, 20, 40, 80, 160, 320] {
         let src = chain(&forms, n);
@@ -111,9 +121,16 @@ fn chains_of_increasing_length_stay_linear_in_size_and_time() {
         // calls with equal constant arguments too.
         let i = m.interpreted();
         let got = i.eval_points(&[[0.1, 0.2, 0.3]])[0].clone().unwrap();
-        assert!(close(got, chain_value(&forms, n, [0.1, 0.2, 0.3])), "{n}: {got}");
+        assert!(
+            close(got, chain_value(&forms, n, [0.1, 0.2, 0.3])),
+            "{n}: {got}"
+        );
         drop(m);
-        assert!(t.elapsed() < Duration::from_secs(20), "{n} levels took {:?}", t.elapsed());
+        assert!(
+            t.elapsed() < Duration::from_secs(20),
+            "{n} levels took {:?}",
+            t.elapsed()
+        );
     }
 }
 
@@ -122,7 +139,11 @@ fn chains_of_increasing_length_stay_linear_in_size_and_time() {
 fn branching(n: usize) -> String {
     let mut s = String::from("o0(x[3], a[1]) { o0 = 1 - x[1]*x[1] - x[2]*x[2] - x[3]*x[3]; }\n");
     for i in 1..n {
-        let name = if i + 1 == n { "my_model".to_string() } else { format!("o{i}") };
+        let name = if i + 1 == n {
+            "my_model".to_string()
+        } else {
+            format!("o{i}")
+        };
         let p = i - 1;
         s += &format!(
             "{name}(x[3], a[1]) {{ array y[3]; y[1] = x[1] * 0.5; y[2] = x[2]; y[3] = x[3]; \
@@ -145,7 +166,11 @@ fn a_really_exponential_program_is_refused_while_it_grows() {
         let msg = err.to_string();
         assert!(msg.contains("expression nodes"), "{msg}");
         assert!(msg.contains("b.hf"), "{msg}");
-        assert!(t.elapsed() < Duration::from_secs(30), "{n}: {:?}", t.elapsed());
+        assert!(
+            t.elapsed() < Duration::from_secs(30),
+            "{n}: {:?}",
+            t.elapsed()
+        );
     }
 }
 
@@ -238,7 +263,11 @@ fn a_shared_call_raises_its_errors_only_where_it_is_reached_and_in_order() {
                     (Ok(x), Ok(y)) => assert!(close(*x, *y), "{p:?}: {x} vs {y}"),
                     (Err(x), Err(y)) => {
                         errors += 1;
-                        assert_eq!((&x.message, x.line, x.col), (&y.message, y.line, y.col), "{p:?}");
+                        assert_eq!(
+                            (&x.message, x.line, x.col),
+                            (&y.message, y.line, y.col),
+                            "{p:?}"
+                        );
                     }
                     _ => panic!("{p:?}: lowered {l:?}, interpreted {r:?}"),
                 }

@@ -880,7 +880,11 @@ mod tests {
             .map(|e| {
                 let e = e.unwrap();
                 let name = e.file_name().to_string_lossy().into_owned();
-                let body = if e.path().is_dir() { b"/".to_vec() } else { fs::read(e.path()).unwrap() };
+                let body = if e.path().is_dir() {
+                    b"/".to_vec()
+                } else {
+                    fs::read(e.path()).unwrap()
+                };
                 (name, body)
             })
             .collect();
@@ -943,7 +947,8 @@ mod tests {
                     .iter()
                     .map(|t| {
                         let mut f = AtomicFile::create(t).unwrap();
-                        f.write_all(format!("new {}", t.display()).as_bytes()).unwrap();
+                        f.write_all(format!("new {}", t.display()).as_bytes())
+                            .unwrap();
                         f
                     })
                     .collect();
@@ -954,7 +959,10 @@ mod tests {
                 } else {
                     r.unwrap();
                     for t in &targets {
-                        assert_eq!(fs::read(t).unwrap(), format!("new {}", t.display()).as_bytes());
+                        assert_eq!(
+                            fs::read(t).unwrap(),
+                            format!("new {}", t.display()).as_bytes()
+                        );
                     }
                     assert_eq!(entries(&d).len(), n, "{kinds:?}: {:?}", entries(&d));
                 }
@@ -995,7 +1003,10 @@ mod tests {
         fs::hard_link(&data, d.join("hard.raw")).unwrap();
         for name in ["ball.raw", "sym.raw", "hard.raw", "./ball.raw"] {
             let e = AtomicFile::create(&d.join(name)).err();
-            assert!(matches!(e, Some(IoError::WouldOverwriteInput { .. })), "{name}");
+            assert!(
+                matches!(e, Some(IoError::WouldOverwriteInput { .. })),
+                "{name}"
+            );
         }
         let e = AtomicDir::create(&data).err();
         assert!(matches!(e, Some(IoError::WouldOverwriteInput { .. })));

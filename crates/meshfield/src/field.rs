@@ -398,7 +398,11 @@ impl MeshField {
     /// field was built with [`SignMethod::Winding`]. It tends to 0 far away and is 0 at an infinite coordinate.
     pub fn winding_number(&self, p: [f64; 3]) -> Option<f64> {
         match &self.sign {
-            Sign::Winding { .. } if p.iter().any(|c| c.is_infinite()) && !p.iter().any(|c| c.is_nan()) => Some(0.0),
+            Sign::Winding { .. }
+                if p.iter().any(|c| c.is_infinite()) && !p.iter().any(|c| c.is_nan()) =>
+            {
+                Some(0.0)
+            }
             Sign::Winding { expansions } => Some(winding::winding_number(&self.bvh, expansions, p)),
             Sign::Pseudo { .. } => None,
         }

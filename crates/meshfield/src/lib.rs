@@ -133,7 +133,9 @@ pub enum MeshError {
         value: [f64; 3],
     },
     /// A coordinate is too large for distances to be computed.
-    #[error("vertex {vertex} at {value:?} is farther than {limit:e} from the origin; scale the mesh")]
+    #[error(
+        "vertex {vertex} at {value:?} is farther than {limit:e} from the origin; scale the mesh"
+    )]
     HugeCoordinate {
         /// Vertex index.
         vertex: usize,

@@ -88,7 +88,13 @@ fn check_far(tag: &str, f: &MeshField, m: &TriMesh, p: [f64; 3]) {
     let c: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a] + hi[a]));
     let s = p.map(|x| x.signum());
     let towards: f64 = (0..3)
-        .map(|a| if (p[a] - c[a]).abs() > diag { g[a] * s[a] } else { 0.0 })
+        .map(|a| {
+            if (p[a] - c[a]).abs() > diag {
+                g[a] * s[a]
+            } else {
+                0.0
+            }
+        })
         .sum();
     assert!(towards < 0.0, "{tag} at {p:?}: gradient {g:?} points away");
     let iv = f.interval(p.map(Interval::point));
@@ -105,8 +111,14 @@ fn check_far(tag: &str, f: &MeshField, m: &TriMesh, p: [f64; 3]) {
         }
     });
     let iv = f.interval(around);
-    assert!(iv.lo <= v && v <= iv.hi, "{tag} at {p:?}: box interval {iv:?} misses {v}");
-    assert!(iv.hi <= 0.0 || iv.lo == f64::NEG_INFINITY, "{tag} at {p:?}: box interval {iv:?}");
+    assert!(
+        iv.lo <= v && v <= iv.hi,
+        "{tag} at {p:?}: box interval {iv:?} misses {v}"
+    );
+    assert!(
+        iv.hi <= 0.0 || iv.lo == f64::NEG_INFINITY,
+        "{tag} at {p:?}: box interval {iv:?}"
+    );
     let pf = p.map(|x| x as f32);
     let mut out = [0f32; 1];
     f.eval_batch(&[pf[0]], &[pf[1]], &[pf[2]], &mut out);
@@ -144,7 +156,10 @@ fn cube_far_along_x_is_outside() {
         assert!(f.eval([f64::NAN, 5.0, 5.0]).is_nan());
         assert!(f.grad([5.0, f64::NAN, 5.0]).1[0].is_nan());
         assert!(f.interval([Interval::point(f64::NAN); 3]).is_nan());
-        assert_eq!(f.interval([Interval::point(f64::INFINITY); 3]).lo, f64::NEG_INFINITY);
+        assert_eq!(
+            f.interval([Interval::point(f64::INFINITY); 3]).lo,
+            f64::NEG_INFINITY
+        );
         assert!(f.closest([1e300, 0.0, 0.0]).is_none());
         assert!(f.closest([f64::INFINITY, 0.0, 0.0]).is_none());
         assert!(f.closest([1e20, 5.0, 5.0]).is_some());
@@ -226,7 +241,10 @@ fn classify_like_brute(tag: &str, f: &MeshField, truth: &TriMesh, seed: u64) {
         let inside = brute_inside(&tris, p);
         let v = f.eval(p);
         assert_eq!(v > 0.0, inside, "{tag} at {p:?}: {v}");
-        assert!((v.abs() - d).abs() < 1e-9 * truth.diagonal(), "{tag} at {p:?}: {v} vs {d}");
+        assert!(
+            (v.abs() - d).abs() < 1e-9 * truth.diagonal(),
+            "{tag} at {p:?}: {v} vs {d}"
+        );
     }
 }
 
@@ -242,10 +260,17 @@ fn inside_out_meshes_are_turned_over() {
     for (tag, m) in &shapes {
         let inv = reversed(m);
         assert!(inv.volume() < 0.0);
-        for sign in [SignMethod::Auto, SignMethod::PseudoNormal, SignMethod::Winding] {
+        for sign in [
+            SignMethod::Auto,
+            SignMethod::PseudoNormal,
+            SignMethod::Winding,
+        ] {
             let f = with_sign(&inv, sign);
             let v = f.inverted().expect("turned over");
-            assert!((v + m.volume()).abs() < 1e-9 * m.volume().abs(), "{tag}: {v}");
+            assert!(
+                (v + m.volume()).abs() < 1e-9 * m.volume().abs(),
+                "{tag}: {v}"
+            );
             classify_like_brute(tag, &f, m, 5);
             let ok = with_sign(m, sign);
             assert_eq!(ok.inverted(), None, "{tag}");
@@ -308,6 +333,9 @@ fn reversed_obj_cone_has_its_volume() {
         }
         let vol = inside as f64 * 2.0 * 2.0 / (k * k * k) as f64;
         let pi3 = std::f64::consts::PI / 3.0;
-        assert!((vol - pi3).abs() < 0.03 * pi3, "{sign:?}: volume {vol}, want {pi3}");
+        assert!(
+            (vol - pi3).abs() < 0.03 * pi3,
+            "{sign:?}: volume {vol}, want {pi3}"
+        );
     }
 }

@@ -30,7 +30,13 @@ fn sphere_hf(d: &std::path::Path, r: f64) -> String {
 /// A closed, outward-wound cube mesh of side `s` at the origin corner.
 fn cube_stl(d: &std::path::Path, s: f64) -> String {
     let p = d.join("cube.stl");
-    let v = |i: usize| -> [f64; 3] { [s * (i & 1) as f64, s * (i >> 1 & 1) as f64, s * (i >> 2 & 1) as f64] };
+    let v = |i: usize| -> [f64; 3] {
+        [
+            s * (i & 1) as f64,
+            s * (i >> 1 & 1) as f64,
+            s * (i >> 2 & 1) as f64,
+        ]
+    };
     let quads = [
         [0, 2, 3, 1],
         [4, 5, 7, 6],
@@ -60,7 +66,9 @@ fn quiet(_: &str, _: u64, _: u64) {}
 fn random_points(b: Bounds, n: usize, seed: u64) -> Vec<[f64; 3]> {
     let mut s = seed;
     let mut next = || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
     (0..n)
@@ -82,7 +90,8 @@ fn every_structure_on_a_hyperfun_and_a_mesh_part_reloads_from_its_hyperfun() {
             };
             let mut opts = FillOptions::new(s, cell, density);
             opts.skin = Some(1.0);
-            let f = fill(&part, &opts, &quiet).unwrap_or_else(|e| panic!("{spec} {}: {e}", s.name()));
+            let f =
+                fill(&part, &opts, &quiet).unwrap_or_else(|e| panic!("{spec} {}: {e}", s.name()));
             let text = f.hyperfun().unwrap_or_else(|e| panic!("{}: {e}", s.name()));
             let hf = d.join("model.hf");
             std::fs::write(&hf, &text).unwrap();
@@ -90,8 +99,13 @@ fn every_structure_on_a_hyperfun_and_a_mesh_part_reloads_from_its_hyperfun() {
                 fields: f.binding().into_iter().collect(),
                 ..Default::default()
             };
-            let back = load::load(&hf.display().to_string(), &lo)
-                .unwrap_or_else(|e| panic!("{} reload: {e}\n{}", s.name(), &text[..text.len().min(2000)]));
+            let back = load::load(&hf.display().to_string(), &lo).unwrap_or_else(|e| {
+                panic!(
+                    "{} reload: {e}\n{}",
+                    s.name(),
+                    &text[..text.len().min(2000)]
+                )
+            });
             let mut a = f.model.point();
             let mut b = back.shape.point();
             let mut part_ev = f.part.point();
@@ -100,7 +114,11 @@ fn every_structure_on_a_hyperfun_and_a_mesh_part_reloads_from_its_hyperfun() {
                 let (va, vb) = (a.eval(p), b.eval(p));
                 // Inside the fill only where inside the part.
                 if va >= 0.0 {
-                    assert!(part_ev.eval(p) >= -1e-9, "{}: solid outside the part at {p:?}", s.name());
+                    assert!(
+                        part_ev.eval(p) >= -1e-9,
+                        "{}: solid outside the part at {p:?}",
+                        s.name()
+                    );
                 }
                 if f.binding().is_none() {
                     assert!(
@@ -115,7 +133,11 @@ fn every_structure_on_a_hyperfun_and_a_mesh_part_reloads_from_its_hyperfun() {
                 }
             }
             // Half the sampling step (the trilinear error at the cube's edges).
-    assert!(worst < 0.25, "{}: mesh part reload differs by {worst}", s.name());
+            assert!(
+                worst < 0.25,
+                "{}: mesh part reload differs by {worst}",
+                s.name()
+            );
         }
     }
 }
@@ -142,7 +164,10 @@ fn a_one_millimetre_skin_on_a_quadratic_ball_is_one_millimetre() {
     // at 9 (closed form), at points along random directions.
     let mut m = f.model.point();
     let mut core = f.core.point();
-    for (k, p) in random_points(Bounds::new([-1.0; 3], [1.0; 3]), 200, 3).iter().enumerate() {
+    for (k, p) in random_points(Bounds::new([-1.0; 3], [1.0; 3]), 200, 3)
+        .iter()
+        .enumerate()
+    {
         let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
         if n < 1e-3 {
             continue;
@@ -151,7 +176,10 @@ fn a_one_millimetre_skin_on_a_quadratic_ball_is_one_millimetre() {
         for r in [9.05, 9.5, 9.95] {
             assert!(m.eval(at(r)) > 0.0, "{k}: skin not solid at r = {r}");
         }
-        assert!(core.eval(at(8.95)) > 0.0 && core.eval(at(9.05)) < 0.0, "{k}: core edge");
+        assert!(
+            core.eval(at(8.95)) > 0.0 && core.eval(at(9.05)) < 0.0,
+            "{k}: core edge"
+        );
     }
     let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
     let s = r.skin.clone().unwrap();
@@ -165,7 +193,8 @@ fn a_one_millimetre_skin_on_a_quadratic_ball_is_one_millimetre() {
     assert!((m.region_volume.value - core_closed).abs() < 0.005 * core_closed);
     let independent = m.volume.value / m.region_volume.value;
     assert!(
-        (r.density.value - independent).abs() <= r.density.error.max(0.002) && r.density.error < 0.015,
+        (r.density.value - independent).abs() <= r.density.error.max(0.002)
+            && r.density.error < 0.015,
         "reported {} ± {}, measured {independent}",
         r.density.value,
         r.density.error
@@ -181,11 +210,20 @@ fn struts_report_their_designed_diameter_and_graded_density_follows_depth() {
     let part = Part::load(&cube, &LoadOptions::default(), None, &quiet).unwrap();
     assert!(part.distance);
     let k = microfrep::structures::struts::StrutLattice::Octet;
-    let f = fill(&part, &FillOptions::new(Structure::Struts(k), 4.0, 0.2), &quiet).unwrap();
+    let f = fill(
+        &part,
+        &FillOptions::new(Structure::Struts(k), 4.0, 0.2),
+        &quiet,
+    )
+    .unwrap();
     let rad = f.design.strut_radius.unwrap();
     let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
     let t = r.thinnest.clone().unwrap();
-    assert!((t.min - 2.0 * rad).abs() < 0.1 * 2.0 * rad, "{t:?} vs diameter {}", 2.0 * rad);
+    assert!(
+        (t.min - 2.0 * rad).abs() < 0.1 * 2.0 * rad,
+        "{t:?} vs diameter {}",
+        2.0 * rad
+    );
     assert!((r.density.value - 0.2).abs() < 0.01, "{:?}", r.density);
     // Graded: 0.15 at the surface to 0.45 from 6 mm in.
     let mut opts = FillOptions::new(
@@ -215,7 +253,10 @@ fn struts_report_their_designed_diameter_and_graded_density_follows_depth() {
     assert!(err.contains("between 0 and 1"), "{err}");
     opts.density = Density::Expression("0.3 +".into());
     let err = fill(&part, &opts, &quiet).err().unwrap().to_string();
-    assert!(err.contains("--density-expr") && !err.contains("/tmp"), "{err}");
+    assert!(
+        err.contains("--density-expr") && !err.contains("/tmp"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -223,17 +264,30 @@ fn irregular_pores_follow_the_parts_box_and_oversized_cells_are_refused() {
     let d = dir("pores");
     let cube = cube_stl(&d, 10.0);
     let part = Part::load(&cube, &LoadOptions::default(), None, &quiet).unwrap();
-    let f = fill(&part, &FillOptions::new(Structure::Irregular, 2.0, 0.45), &quiet).unwrap();
+    let f = fill(
+        &part,
+        &FillOptions::new(Structure::Irregular, 2.0, 0.45),
+        &quiet,
+    )
+    .unwrap();
     let (made, _) = f.design.pores.unwrap();
     // The octree halves the cube's own box until cells are at most 2 mm:
     // 8 x 8 x 8 cells of 1.25 mm, every one in the part.
     assert_eq!(made, 512);
     let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
-    assert!((r.density.value - 0.45).abs() < 0.01 + r.density.error, "{:?}", r.density);
-    let err = fill(&part, &FillOptions::new(Structure::Irregular, 50.0, 0.3), &quiet)
-        .err()
-        .unwrap()
-        .to_string();
+    assert!(
+        (r.density.value - 0.45).abs() < 0.01 + r.density.error,
+        "{:?}",
+        r.density
+    );
+    let err = fill(
+        &part,
+        &FillOptions::new(Structure::Irregular, 50.0, 0.3),
+        &quiet,
+    )
+    .err()
+    .unwrap()
+    .to_string();
     assert!(err.contains("larger than the part"), "{err}");
     let mut o = FillOptions::new(Structure::Irregular, 2.0, 0.3);
     o.seed = 1 << 60;

@@ -301,9 +301,8 @@ pub fn fill(part: &Part, opts: &FillOptions, progress: Progress) -> Result<Fille
             // Spheres of radius r(rho) centred in cubic cells of side c:
             // the solid is where the distance to the cell centre exceeds r.
             let radius = ((1.0 - &rho) * (3.0 / (4.0 * std::f64::consts::PI))).pow(1.0 / 3.0) * c;
-            let q: [Expr; 3] = std::array::from_fn(|i| {
-                (microfrep_core::frep::sawtooth(&x[i], c) - 0.5) * c
-            });
+            let q: [Expr; 3] =
+                std::array::from_fn(|i| (microfrep_core::frep::sawtooth(&x[i], c) - 0.5) * c);
             let r2 = q[0].square() + q[1].square() + q[2].square();
             r2.sqrt() - radius
         }
@@ -388,7 +387,9 @@ fn depth_cap(part: &Part, opts: &FillOptions) -> f64 {
 fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
     let c = opts.cell;
     if !(c.is_finite() && c > 0.0) {
-        return Err(bad(format!("--cell {c} must be a positive size in millimetres")));
+        return Err(bad(format!(
+            "--cell {c} must be a positive size in millimetres"
+        )));
     }
     let size = part.bounds.size();
     let smallest = size.iter().copied().fold(f64::INFINITY, f64::min);
@@ -434,7 +435,9 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
         if r.is_finite() && r > 0.0 && r < 1.0 {
             Ok(())
         } else {
-            Err(bad(format!("{what} {r} must be between 0 and 1 (a volume fraction)")))
+            Err(bad(format!(
+                "{what} {r} must be between 0 and 1 (a volume fraction)"
+            )))
         }
     };
     match &opts.density {
@@ -447,7 +450,9 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
             unit("--density-grade surface density", *at_surface)?;
             unit("--density-grade inner density", *at_depth)?;
             if !(depth.is_finite() && *depth > 0.0) {
-                return Err(bad(format!("--density-grade depth {depth} must be positive")));
+                return Err(bad(format!(
+                    "--density-grade depth {depth} must be positive"
+                )));
             }
         }
         Density::Expression(e) if e.trim().is_empty() => {
@@ -506,14 +511,15 @@ fn expression(text: &str, d: &Expr) -> Result<Expr, FillError> {
         params: Vec::new(),
         fields: vec![("fill_depth".into(), mark.clone())],
     };
-    let model = microfrep_hyperfun::load_with_options(&src, "--density-expr", &opts).map_err(|e| {
-        let col = (e.pos.col as usize).saturating_sub(prefix.len());
-        bad(format!(
-            "--density-expr '{text}': {} (at column {})",
-            e.message,
-            col.max(1)
-        ))
-    })?;
+    let model =
+        microfrep_hyperfun::load_with_options(&src, "--density-expr", &opts).map_err(|e| {
+            let col = (e.pos.col as usize).saturating_sub(prefix.len());
+            bad(format!(
+                "--density-expr '{text}': {} (at column {})",
+                e.message,
+                col.max(1)
+            ))
+        })?;
     let e = model.shape().value().clone();
     Ok(e.replace_fields(&|f, comp, _| {
         if Arc::ptr_eq(f, &mark) && comp == 0 {
@@ -553,7 +559,9 @@ fn check_density_range(
         Density::Field(_) => "the density field",
     };
     let hint = match opts.structure {
-        Structure::Pores => " (spherical pores on a cubic grid cannot go lower; use irregular pores or a TPMS)",
+        Structure::Pores => {
+            " (spherical pores on a cubic grid cannot go lower; use irregular pores or a TPMS)"
+        }
         _ => "",
     };
     let check = |v: f64, at: [f64; 3]| -> Result<(), FillError> {

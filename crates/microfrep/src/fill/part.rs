@@ -38,7 +38,11 @@ pub struct Part {
 /// The root data field of a shape sampled at the plain point, if any.
 fn root_field(e: &Expr) -> Option<&Arc<dyn Field>> {
     match e.node() {
-        ExprNode::Field { field, comp: 0, args } => {
+        ExprNode::Field {
+            field,
+            comp: 0,
+            args,
+        } => {
             let identity = args
                 .iter()
                 .enumerate()
@@ -60,9 +64,12 @@ impl Part {
     ) -> Result<Part, FillError> {
         let l = load::load_with_progress(spec, opts, progress)?;
         if l.kind == SourceKind::Data {
-            return Err(bad("fill takes a mesh, a scan, a HyperFun model or an example as the part"));
+            return Err(bad(
+                "fill takes a mesh, a scan, a HyperFun model or an example as the part",
+            ));
         }
-        let source = matches!(l.kind, SourceKind::Mesh | SourceKind::Scan).then(|| spec.to_string());
+        let source =
+            matches!(l.kind, SourceKind::Mesh | SourceKind::Scan).then(|| spec.to_string());
         let mut part = Part::from_shape(l.shape, bounds)?;
         part.source = source.or(part.source);
         part.notes = l.notes;
@@ -83,7 +90,10 @@ impl Part {
             })?,
         };
         if !bounds.is_valid() {
-            return Err(bad(format!("the part's box {:?} is empty", bounds.corners())));
+            return Err(bad(format!(
+                "the part's box {:?} is empty",
+                bounds.corners()
+            )));
         }
         let field = root_field(shape.value());
         let distance = field.is_some_and(|f| f.is_signed_distance());
@@ -219,7 +229,11 @@ pub(crate) fn halton3(k: u64) -> [f64; 3] {
 pub fn depth_estimate(f: &Expr, cap: f64) -> Expr {
     let tiny = 1e-30;
     let g = f.gradient();
-    let norm = |g: &[Expr; 3]| (g[0].square() + g[1].square() + g[2].square()).sqrt().max(tiny);
+    let norm = |g: &[Expr; 3]| {
+        (g[0].square() + g[1].square() + g[2].square())
+            .sqrt()
+            .max(tiny)
+    };
     let n0 = norm(&g);
     let d1 = (f / &n0).max(-cap).min(cap);
     let x = Expr::xyz();
@@ -307,7 +321,13 @@ fn cache_field(
                 be.eval(&x, &y, &z, &mut out);
                 let vals = out
                     .into_iter()
-                    .map(|v| if v.is_nan() { -band } else { (v as f64).clamp(-band, band) })
+                    .map(|v| {
+                        if v.is_nan() {
+                            -band
+                        } else {
+                            (v as f64).clamp(-band, band)
+                        }
+                    })
                     .collect();
                 (k, vals)
             },
@@ -350,7 +370,10 @@ mod tests {
             let p = [rho * 0.6, rho * 0.0, rho * 0.8];
             let got = ev.eval(p);
             let want = (10.0 - rho).clamp(-5.0, 5.0);
-            assert!((got - want).abs() < 2e-3 * want.abs().max(1.0), "{rho}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 2e-3 * want.abs().max(1.0),
+                "{rho}: {got} vs {want}"
+            );
         }
         // Deep inside (the gradient vanishes at the centre): capped.
         assert_eq!(ev.eval([0.0, 0.0, 0.0]), 5.0);
@@ -360,10 +383,20 @@ mod tests {
     #[test]
     fn depth_estimate_is_exact_in_a_box() {
         let x = Expr::xyz();
-        let f = (1.0 - x[0].abs()).min(2.0 - x[1].abs()).min(3.0 - x[2].abs()) * 7.0;
+        let f = (1.0 - x[0].abs())
+            .min(2.0 - x[1].abs())
+            .min(3.0 - x[2].abs())
+            * 7.0;
         let mut ev = Shape::new(depth_estimate(&f, 10.0)).point();
-        for p in [[0.5, 0.0, 0.0], [0.9, 1.9, 0.0], [-0.2, 1.5, 2.7], [1.5, 0.0, 0.0]] {
-            let want = (1.0 - p[0].abs()).min(2.0 - p[1].abs()).min(3.0 - p[2].abs());
+        for p in [
+            [0.5, 0.0, 0.0],
+            [0.9, 1.9, 0.0],
+            [-0.2, 1.5, 2.7],
+            [1.5, 0.0, 0.0],
+        ] {
+            let want = (1.0 - p[0].abs())
+                .min(2.0 - p[1].abs())
+                .min(3.0 - p[2].abs());
             assert!((ev.eval(p) - want).abs() < 1e-9, "{p:?}");
         }
     }

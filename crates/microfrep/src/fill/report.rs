@@ -318,7 +318,10 @@ fn designed_feature(f: &Filled, side: f64) -> Result<f64, FillError> {
             let grid = Grid::with_voxel(b, side / 32.0).map_err(err)?;
             let labels = Sampler::new(&f.infill, None, grid.clone()).all(&|_, _| {});
             let t = local_thickness_field(&labels, grid.dims, SOLID).map_err(err)?;
-            let mut v: Vec<f32> = t.into_iter().filter(|&x| x > 0.0 && x.is_finite()).collect();
+            let mut v: Vec<f32> = t
+                .into_iter()
+                .filter(|&x| x > 0.0 && x.is_finite())
+                .collect();
             if v.is_empty() {
                 side
             } else {
@@ -342,9 +345,8 @@ fn place_boxes(f: &Filled, side: f64, max: usize) -> Vec<[[f64; 3]; 2]> {
     let mut out = Vec::new();
     for k in 1..=(64 * max as u64) {
         let u = super::part::halton3(k);
-        let c: [f64; 3] = std::array::from_fn(|a| {
-            b.min[a] - 0.5 * side + u[a] * (b.max[a] - b.min[a] + side)
-        });
+        let c: [f64; 3] =
+            std::array::from_fn(|a| b.min[a] - 0.5 * side + u[a] * (b.max[a] - b.min[a] + side));
         let lo: [f64; 3] = std::array::from_fn(|a| c[a] - 0.5 * side);
         let hi: [f64; 3] = std::array::from_fn(|a| c[a] + 0.5 * side);
         let r = iv.eval(
@@ -550,7 +552,9 @@ fn skin_rays(f: &Filled, skin: &Shape, t: f64, rays: usize) -> Result<SkinFigure
         }
     }
     if starts.is_empty() {
-        return Err(err("found no point on the part's surface to measure the skin from"));
+        return Err(err(
+            "found no point on the part's surface to measure the skin from",
+        ));
     }
     let reach = 3.0 * t;
     let steps = 96;
@@ -633,7 +637,11 @@ fn connectivity(
         voxel: grid.voxel_size(),
         resolved: grid.voxel_size() <= 0.5 * feature,
         solid_components: c.solid_components,
-        loose_fraction: if total > 0.0 { 1.0 - largest / total } else { 0.0 },
+        loose_fraction: if total > 0.0 {
+            1.0 - largest / total
+        } else {
+            0.0
+        },
         open_fraction: if c.pore_volume > 0.0 {
             c.open_pore_fraction()
         } else {
