@@ -370,8 +370,10 @@ mod tests {
             let p = [rho * 0.6, rho * 0.0, rho * 0.8];
             let got = ev.eval(p);
             let want = (10.0 - rho).clamp(-5.0, 5.0);
+            // Two Newton steps: near exact in the skin, within 1 % deeper.
+            let tol = if want.abs() <= 1.5 { 2e-3 } else { 0.01 * want.abs() };
             assert!(
-                (got - want).abs() < 2e-3 * want.abs().max(1.0),
+                (got - want).abs() < tol,
                 "{rho}: {got} vs {want}"
             );
         }
@@ -389,7 +391,7 @@ mod tests {
             * 7.0;
         let mut ev = Shape::new(depth_estimate(&f, 10.0)).point();
         for p in [
-            [0.5, 0.0, 0.0],
+            [0.5f64, 0.0, 0.0],
             [0.9, 1.9, 0.0],
             [-0.2, 1.5, 2.7],
             [1.5, 0.0, 0.0],
