@@ -371,11 +371,12 @@ mod tests {
             let got = ev.eval(p);
             let want = (10.0 - rho).clamp(-5.0, 5.0);
             // Two Newton steps: near exact in the skin, within 1 % deeper.
-            let tol = if want.abs() <= 1.5 { 2e-3 } else { 0.01 * want.abs() };
-            assert!(
-                (got - want).abs() < tol,
-                "{rho}: {got} vs {want}"
-            );
+            let tol = if want.abs() <= 1.5 {
+                2e-3
+            } else {
+                0.01 * want.abs()
+            };
+            assert!((got - want).abs() < tol, "{rho}: {got} vs {want}");
         }
         // Deep inside (the gradient vanishes at the centre): capped.
         assert_eq!(ev.eval([0.0, 0.0, 0.0]), 5.0);
