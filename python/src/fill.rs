@@ -7,11 +7,9 @@
 
 use crate::errors;
 use crate::model::{check_box, PyExpr, PyShape};
-use microfrep::fill::report::ThicknessFigure;
 use microfrep::fill::{self, Density, FillError, FillOptions, Filled, MeasureOptions, Part, Structure};
 use microfrep::Bounds;
 use pyo3::prelude::*;
-use serde_json::json;
 
 /// A filled part: the model and what it was built from.
 #[pyclass(name = "Filled", module = "microfrep._core", frozen)]
@@ -139,12 +137,6 @@ fn fill_part(
     })
 }
 
-fn thickness_json(t: &Option<ThicknessFigure>, error: f64) -> serde_json::Value {
-    match t {
-        Some(t) => json!({ "min": t.min, "at": t.at, "p10": t.p10, "mean": t.mean, "error": error }),
-        None => serde_json::Value::Null,
-    }
-}
 
 impl PyFilled {
     /// One of the fill's shapes, named after the part in messages.
@@ -234,50 +226,11 @@ impl PyFilled {
             connectivity_voxels: connectivity_voxels.unwrap_or(d.connectivity_voxels),
             rays: rays.unwrap_or(d.rays),
         };
-        if !(mo.voxels_across.is_finite() && mo.voxels_across > 0.0)
-            || !(mo.target_error.is_finite() && mo.target_error > 0.0)
-            || mo.min_boxes == 0
-            || mo.max_boxes < mo.min_boxes
-            || mo.rays == 0
-        {
-            return Err(errors::input(
-                "fill report: voxels_across and target_error must be positive, 1 <= min_boxes \
-                 <= max_boxes, rays >= 1",
-            ));
-        }
         let f = &self.f;
         let r = py
             .allow_threads(|| f.measure(&mo, &|_, _, _| {}))
             .map_err(|e| fill_error(py, e, &self.part))?;
-        let target = match &f.options.density {
-            Density::Constant(v) => json!(v),
-            _ => serde_json::Value::Null,
-        };
-        let c = r.connectivity.as_ref();
-        let j = json!({
-            "structure": f.options.structure.name(),
-            "cell": f.options.cell,
-            "density": { "target": target, "measured": r.density.value, "error": r.density.error },
-            "volume_fraction": r.density.value,
-            "volume_fraction_error": r.density.error,
-            "skin": r.skin.as_ref().map(|s| json!({
-                "target": f.options.skin, "min": s.min, "at": s.at, "mean": s.mean,
-                "rays": s.rays, "error": s.error, "unbounded_rays": s.unbounded,
-            })),
-            "thinnest": thickness_json(&r.thinnest, r.voxel),
-            "pore_size": thickness_json(&r.pores, r.voxel),
-            "connectivity": c.map(|c| json!({
-                "voxel": c.voxel, "resolved": c.resolved,
-                "solid_components": c.solid_components, "loose_fraction": c.loose_fraction,
-                "open_pore_fraction": c.open_fraction, "closed_pores": c.closed_pores,
-                "percolates": c.percolates, "sealed_by_skin": r.sealed,
-            })),
-            "measured": {
-                "voxel": r.voxel, "cube": r.box_side, "cubes": r.boxes,
-                "thickness_cubes": r.thickness_boxes, "feature": r.feature, "seconds": r.seconds,
-            },
-            "notes": f.notes.iter().chain(&r.notes).collect::<Vec<_>>(),
-        });
+        let j = r.to_json(f);
         Ok(j.to_string())
     }
 }

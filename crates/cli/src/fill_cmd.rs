@@ -401,38 +401,10 @@ fn report_json(
     r: &FillReport,
     written: serde_json::Value,
 ) -> serde_json::Value {
-    let t = |t: &Option<microfrep::fill::report::ThicknessFigure>| {
-        t.as_ref().map(|t| {
-            serde_json::json!({ "min": t.min, "at": t.at, "p10": t.p10, "mean": t.mean, "error": r.voxel })
-        })
-    };
-    let c = r.connectivity.as_ref();
-    serde_json::json!({
-        "output": a.output.display().to_string(),
-        "written": written,
-        "structure": f.options.structure.name(),
-        "cell": f.options.cell,
-        "density": { "target": a.density, "measured": r.density.value, "error": r.density.error },
-        "volume_fraction": r.density.value,
-        "volume_fraction_error": r.density.error,
-        "skin": r.skin.as_ref().map(|s| serde_json::json!({
-            "target": a.shell, "min": s.min, "at": s.at, "mean": s.mean, "rays": s.rays,
-            "error": s.error, "unbounded_rays": s.unbounded,
-        })),
-        "thinnest": t(&r.thinnest),
-        "pore_size": t(&r.pores),
-        "connectivity": c.map(|c| serde_json::json!({
-            "voxel": c.voxel, "resolved": c.resolved,
-            "solid_components": c.solid_components, "loose_fraction": c.loose_fraction,
-            "open_pore_fraction": c.open_fraction, "closed_pores": c.closed_pores,
-            "percolates": c.percolates, "sealed_by_skin": r.sealed,
-        })),
-        "measured": {
-            "voxel": r.voxel, "cube": r.box_side, "cubes": r.boxes,
-            "thickness_cubes": r.thickness_boxes, "feature": r.feature, "seconds": r.seconds,
-        },
-        "notes": f.notes.iter().chain(&r.notes).collect::<Vec<_>>(),
-    })
+    let mut j = r.to_json(f);
+    j["output"] = a.output.display().to_string().into();
+    j["written"] = written;
+    j
 }
 
 fn print_report(a: &FillArgs, f: &Filled, r: &FillReport, written: &serde_json::Value) {

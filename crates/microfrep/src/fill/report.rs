@@ -70,6 +70,24 @@ impl Default for MeasureOptions {
     }
 }
 
+impl MeasureOptions {
+    /// Refuses options that cannot measure anything.
+    pub fn check(&self) -> Result<(), FillError> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(self.voxels_across) || !positive(self.target_error) {
+            return Err(FillError::Option(
+                "the report's voxels across a feature and target error must be positive".into(),
+            ));
+        }
+        if self.min_boxes == 0 || self.max_boxes < self.min_boxes || self.rays == 0 {
+            return Err(FillError::Option(
+                "the report needs 1 <= min cubes <= max cubes and at least one skin ray".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// A measured figure and its error (same units).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Figure {
@@ -171,6 +189,7 @@ pub fn measure(
     opts: &MeasureOptions,
     progress: Progress,
 ) -> Result<FillReport, FillError> {
+    opts.check()?;
     let t0 = Instant::now();
     let cell = f.options.cell;
     let mut notes = Vec::new();
@@ -707,6 +726,34 @@ mod tests {
     use super::*;
 
     #[test]
+    fn measure_options_that_cannot_measure_are_refused() {
+        assert!(MeasureOptions::default().check().is_ok());
+        let d = MeasureOptions::default;
+        for bad in [
+            MeasureOptions {
+                voxels_across: 0.0,
+                ..d()
+            },
+            MeasureOptions {
+                target_error: f64::NAN,
+                ..d()
+            },
+            MeasureOptions {
+                min_boxes: 0,
+                ..d()
+            },
+            MeasureOptions {
+                max_boxes: 3,
+                min_boxes: 4,
+                ..d()
+            },
+            MeasureOptions { rays: 0, ..d() },
+        ] {
+            assert!(matches!(bad.check(), Err(FillError::Option(_))), "{bad:?}");
+        }
+    }
+
+    #[test]
     fn shells_count_separate_pieces() {
         // Two triangles sharing a vertex, and a third apart.
         let t = [[0, 1, 2], [2, 3, 4], [5, 6, 7]];
@@ -722,5 +769,49 @@ mod tests {
         let (r, e) = ratio(&[1.0, 0.0], &[2.0, 2.0], 0.0);
         assert_eq!(r, 0.25);
         assert!(e > 0.2);
+    }
+}
+
+impl FillReport {
+    /// The report as JSON, with the keys `microfrep fill --json` prints
+    /// (and `analyze --json` where they overlap: `volume_fraction`); what
+    /// an output wrote is the caller's to add.
+    pub fn to_json(&self, f: &Filled) -> serde_json::Value {
+        use serde_json::json;
+        let thickness = |t: &Option<ThicknessFigure>| {
+            t.as_ref().map(|t| {
+                json!({ "min": t.min, "at": t.at, "p10": t.p10, "mean": t.mean, "error": self.voxel })
+            })
+        };
+        let target = match &f.options.density {
+            super::Density::Constant(v) => json!(v),
+            _ => serde_json::Value::Null,
+        };
+        let c = self.connectivity.as_ref();
+        json!({
+            "structure": f.options.structure.name(),
+            "cell": f.options.cell,
+            "density": { "target": target, "measured": self.density.value, "error": self.density.error },
+            "volume_fraction": self.density.value,
+            "volume_fraction_error": self.density.error,
+            "skin": self.skin.as_ref().map(|s| json!({
+                "target": f.options.skin, "min": s.min, "at": s.at, "mean": s.mean,
+                "rays": s.rays, "error": s.error, "unbounded_rays": s.unbounded,
+            })),
+            "thinnest": thickness(&self.thinnest),
+            "pore_size": thickness(&self.pores),
+            "connectivity": c.map(|c| json!({
+                "voxel": c.voxel, "resolved": c.resolved,
+                "solid_components": c.solid_components, "loose_fraction": c.loose_fraction,
+                "open_pore_fraction": c.open_fraction, "closed_pores": c.closed_pores,
+                "percolates": c.percolates, "sealed_by_skin": self.sealed,
+            })),
+            "measured": {
+                "voxel": self.voxel, "cube": self.box_side, "cubes": self.boxes,
+                "thickness_cubes": self.thickness_boxes, "feature": self.feature,
+                "seconds": self.seconds,
+            },
+            "notes": f.notes.iter().chain(&self.notes).collect::<Vec<_>>(),
+        })
     }
 }
