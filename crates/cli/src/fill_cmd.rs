@@ -49,7 +49,9 @@ pub struct FillArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Mesh cells along the longest side, or `auto` (default): cells of at
-    /// most half the thinnest wall, strut or skin measured.
+    /// most half the skin and the walls or struts measured (walls thinner
+    /// than both the design and the walls' 10th percentile are named in a
+    /// note); a beam lattice's meshes follow its skin.
     #[arg(long, conflicts_with = "voxel")]
     resolution: Option<String>,
     /// Mesh cell size (mm).
@@ -213,7 +215,7 @@ pub fn run(a: FillArgs) -> Result<()> {
         Ok((f, r))
     })();
     bar.finish_and_clear();
-    let (f, r) = built.with_context(|| format!("fill {}", a.part.model))?;
+    let (f, mut r) = built.with_context(|| format!("fill {}", a.part.model))?;
     // Printability before anything is written.
     if let (Some(w), Some(t)) = (a.min_wall, &r.thinnest) {
         let thinnest = match &r.skin {
@@ -248,7 +250,7 @@ pub fn run(a: FillArgs) -> Result<()> {
             let Structure::Struts(k) = structure else {
                 unreachable!("beam lattices are struts")
             };
-            let n = mesh_resolution(&a, &f, &r, b)?;
+            let n = mesh_resolution(&a, thinnest_beam(&r, a.cell), b)?;
             let (beams, nodes) = microfrep::export::beam_lattice_fill_3mf(
                 &f.core,
                 f.skin.as_ref(),
@@ -266,8 +268,20 @@ pub fn run(a: FillArgs) -> Result<()> {
             })
         }
         Output::Mesh => {
-            let n = mesh_resolution(&a, &f, &r, b)?;
+            let n = mesh_resolution(&a, thinnest(&r), b)?;
             let (s, shells) = mesh_checked(&a, &f, b, n)?;
+            if let Some(t) = &r.thinnest {
+                if t.min < 2.0 * s.cell {
+                    r.notes.push(format!(
+                        "walls down to {} mm (at {}) are under two mesh cells of {} mm: the \
+                         mesh may open them; --resolution {} shows them",
+                        num(t.min),
+                        point(&t.at),
+                        num(s.cell),
+                        (n as f64 * 2.0 * s.cell / t.min).ceil() as usize
+                    ));
+                }
+            }
             let mut j = serde_json::json!({
                 "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges,
                 "volume": s.volume, "resolution": n, "cell": s.cell, "shells": shells,
@@ -302,13 +316,26 @@ fn point(p: &[f64; 3]) -> String {
     format!("({}, {}, {})", num(p[0]), num(p[1]), num(p[2]))
 }
 
-/// The thinnest feature the mesh must show: the walls, struts and skin.
+/// The thinnest feature the mesh must show: the skin, and the walls and
+/// struts down to the thinner of the designed feature and the walls' 10th
+/// percentile (slivers below both, where random pores nearly touch, are
+/// named in a note instead of driving the mesh to cells of a few microns).
 fn thinnest(r: &FillReport) -> f64 {
-    let mut t = r.thinnest.as_ref().map_or(r.feature, |t| t.min);
+    let mut t = r
+        .thinnest
+        .as_ref()
+        .map_or(r.feature, |t| t.min.max(t.p10.min(r.feature)));
     if let Some(s) = &r.skin {
         t = t.min(s.min);
     }
     t.max(1e-12)
+}
+
+/// The thinnest feature a beam lattice's meshes must show: the skin (the
+/// struts are beams, not triangles); without a skin, the core's clip mesh
+/// follows the part to a quarter cell.
+fn thinnest_beam(r: &FillReport, cell: f64) -> f64 {
+    r.skin.as_ref().map_or(cell / 2.0, |s| s.min).max(1e-12)
 }
 
 /// Most mesh cells on a side (the mesher's limit).
@@ -317,9 +344,8 @@ const MAX_MESH_RESOLUTION: usize = 65533;
 /// Mesh cells: `auto` (default) gives cells of at most half the thinnest
 /// measured feature; an explicit resolution coarser than that is refused
 /// with the one that works.
-fn mesh_resolution(a: &FillArgs, f: &Filled, r: &FillReport, b: Bounds) -> Result<usize> {
+fn mesh_resolution(a: &FillArgs, t: f64, b: Bounds) -> Result<usize> {
     let longest = b.size().iter().copied().fold(0.0, f64::max);
-    let t = thinnest(r);
     let need = (2.0 * longest / t).ceil() as usize;
     let asked = match (a.resolution.as_deref(), a.voxel) {
         (Some("auto") | None, None) => None,
@@ -329,7 +355,6 @@ fn mesh_resolution(a: &FillArgs, f: &Filled, r: &FillReport, b: Bounds) -> Resul
         ),
         (None, Some(v)) => Some(microfrep::mesh::Grid::resolution_for_voxel(b.corners(), v)?),
     };
-    let _ = f;
     match asked {
         None => {
             if need > MAX_MESH_RESOLUTION {

@@ -105,3 +105,98 @@ fn bad_requests_write_nothing_and_advise_real_options() {
         }
     }
 }
+
+fn fill_json(args: &[&str], out: &std::path::Path) -> serde_json::Value {
+    let o = Command::new(bin())
+        .arg("fill")
+        .args(args)
+        .args(["--json", "-o"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.exists());
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn the_mesh_follows_the_walls_and_names_slivers_it_cannot_show() {
+    let d = dir("rule");
+    let part = ball(&d);
+    // Irregular pores: random walls, some nearly closed. The mesh cells are
+    // at most half the designed wall (or the walls' 10th percentile); walls
+    // below two cells are named in a note with the resolution that shows
+    // them.
+    let j = fill_json(
+        &[
+            &part,
+            "--structure",
+            "irregular",
+            "--cell",
+            "3",
+            "--density",
+            "0.3",
+        ],
+        &d.join("irr.stl"),
+    );
+    let cell = j["written"]["cell"].as_f64().unwrap();
+    let feature = j["measured"]["feature"].as_f64().unwrap();
+    for key in ["thinnest", "pore_size"] {
+        let t = &j[key];
+        let (min, p10, mean) = (
+            t["min"].as_f64().unwrap(),
+            t["p10"].as_f64().unwrap(),
+            t["mean"].as_f64().unwrap(),
+        );
+        assert!(min > 0.0 && min <= p10 && p10 <= mean, "{key}: {j}");
+    }
+    let t = &j["thinnest"];
+    let wall = t["min"]
+        .as_f64()
+        .unwrap()
+        .max(t["p10"].as_f64().unwrap().min(feature));
+    assert!(
+        cell <= wall / 2.0 * 1.01,
+        "cells {cell} for walls {wall}: {j}"
+    );
+    let noted = j["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|n| n.as_str().unwrap().contains("under two mesh cells"));
+    assert_eq!(
+        noted,
+        t["min"].as_f64().unwrap() < 2.0 * cell,
+        "the sliver note: {j}"
+    );
+
+    // A beam lattice meshes only its skin (and the core's clip): the
+    // resolution follows the skin, not the struts.
+    let j = fill_json(
+        &[
+            &part,
+            "--structure",
+            "octet",
+            "--cell",
+            "4",
+            "--density",
+            "0.2",
+            "--shell",
+            "1",
+        ],
+        &d.join("lattice.3mf"),
+    );
+    assert_eq!(j["written"]["kind"], "beam-lattice", "{j}");
+    let strut = j["thinnest"]["min"].as_f64().unwrap();
+    let skin = j["skin"]["min"].as_f64().unwrap();
+    assert!(strut < skin, "{j}");
+    let n = j["written"]["resolution"].as_f64().unwrap();
+    // The ball's box is about 20 mm (bounds from interval analysis may pad
+    // it a little): cells near half the skin, well coarser than the struts'.
+    assert!(n <= 2.0 * 24.0 / skin + 1.0, "{j}");
+    assert!(n >= 2.0 * 20.0 / skin - 1.0, "{j}");
+}
