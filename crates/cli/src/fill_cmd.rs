@@ -269,6 +269,7 @@ pub fn run(a: FillArgs) -> Result<()> {
         }
         Output::Mesh => {
             let n = mesh_resolution(&a, thinnest(&r), b)?;
+            check_mesh_size(&r, b, n)?;
             let (s, shells) = mesh_checked(&a, &f, b, n)?;
             if let Some(t) = &r.thinnest {
                 if t.min < 2.0 * s.cell {
@@ -378,6 +379,48 @@ fn mesh_resolution(a: &FillArgs, t: f64, b: Bounds) -> Result<usize> {
         ),
         Some(n) => Ok(n),
     }
+}
+
+/// Triangles of a marching-cubes mesh per unit area over the squared cell
+/// (measured on fills of the femur: 2.9 for irregular pores; 3.3 for an
+/// octet and 4.4 for a gyroid with a 2 mm skin, whose surfaces the estimate
+/// leaves out).
+const TRIANGLES_PER_CELL_AREA: f64 = 3.0;
+
+/// Bytes a triangle takes while the written mesh is read back and checked
+/// (vertices, indices, welding).
+const CHECK_BYTES_PER_TRIANGLE: f64 = 150.0;
+
+/// Refuses, before any work, a mesh that would not fit this machine: its
+/// triangles estimated from the infill's measured surface and the part's
+/// volume.
+fn check_mesh_size(r: &FillReport, b: Bounds, n: usize) -> Result<()> {
+    let Some(area) = r.surface_estimate() else {
+        return Ok(());
+    };
+    let longest = b.size().iter().copied().fold(0.0, f64::max);
+    let h = longest / n as f64;
+    let triangles = TRIANGLES_PER_CELL_AREA * area / (h * h);
+    if std::env::var_os("MICROFREP_FILL_DEBUG").is_some() {
+        eprintln!("estimated triangles {triangles:.0} (area {area:.1} mm^2, cell {h})");
+    }
+    let need = triangles * CHECK_BYTES_PER_TRIANGLE;
+    let limit = microfrep::io::limits::memory_limit().unwrap_or(f64::INFINITY);
+    if need > limit {
+        bail!(
+            "the mesh that shows these walls ({n} cells of {} mm on the longest side) would have \
+             about {:.0} million triangles ({:.1} GB as STL), needing about {:.0} GB of memory to \
+             write and check, more than the {:.1} GB free; nothing written: write a slice stack \
+             (--format png) or a .hf model, or fill with thicker walls (a larger --cell or a \
+             higher --density)",
+            num(h),
+            triangles / 1e6,
+            triangles * 50.0 / 1e9,
+            need / 1e9,
+            limit / 1e9
+        );
+    }
+    Ok(())
 }
 
 /// Meshes into a staging folder, checks the written mesh (a skinned part

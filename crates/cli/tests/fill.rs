@@ -200,3 +200,37 @@ fn the_mesh_follows_the_walls_and_names_slivers_it_cannot_show() {
     assert!(n <= 2.0 * 24.0 / skin + 1.0, "{j}");
     assert!(n >= 2.0 * 20.0 / skin - 1.0, "{j}");
 }
+
+#[test]
+fn a_mesh_too_large_for_the_machine_is_refused_before_it_is_written() {
+    let d = dir("huge");
+    let part = d.join("cube.hf");
+    std::fs::write(
+        &part,
+        "my_model(x[3], a[1]) {\n  my_model = min(min(5-abs(x[1]), 5-abs(x[2])), 5-abs(x[3]));\n}\n",
+    )
+    .unwrap();
+    // A 0.05 mm gyroid in a 10 mm cube: walls of about 12 microns, a mesh
+    // of over a billion triangles (hundreds of GB to write and check).
+    let out = d.join("g.stl");
+    let t = std::time::Instant::now();
+    let o = Command::new(bin())
+        .args(["fill", part.to_str().unwrap(), "--structure", "gyroid"])
+        .args(["--cell", "0.05", "--density", "0.3", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("million triangles") && err.contains("nothing written"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left.len(), 1, "only the part is left: {left:?}");
+    assert!(t.elapsed().as_secs() < 120, "{:?}", t.elapsed());
+}

@@ -145,6 +145,8 @@ pub struct ConnectivityFigure {
     pub closed_pores: usize,
     /// Percolation of the pores between opposite faces of the box.
     pub percolates: [bool; 3],
+    /// Volume of the part (its solid and its pores) on the grid.
+    pub part_volume: f64,
 }
 
 /// What [`measure`](super::Filled::measure) found.
@@ -152,6 +154,9 @@ pub struct ConnectivityFigure {
 pub struct FillReport {
     /// Infill volume fraction inside the core.
     pub density: Figure,
+    /// Surface of the infill per volume of the core in the density cubes
+    /// (1/mm): with the part's volume, what sizes a mesh before it is made.
+    pub area_per_volume: f64,
     /// The thinnest designed feature the voxels were sized from.
     pub feature: f64,
     /// Voxel size of the density and thickness cubes.
@@ -219,6 +224,7 @@ pub fn measure(
     let quiet = |_: usize, _: usize| {};
     let mut inf = Vec::new();
     let mut core = Vec::new();
+    let mut area = 0.0;
     let mut meas_err = 0.0;
     let mut estimate = (f64::NAN, f64::INFINITY);
     let mut interior = Vec::new();
@@ -231,6 +237,7 @@ pub fn measure(
         }
         inf.push(m.volume.value);
         core.push(m.region_volume.value);
+        area += m.area.value;
         meas_err += m.volume.error() + m.region_volume.error();
         if interior.len() < opts.thickness_boxes && wholly_inside(&f.core, &grown(b, 0.25)) {
             interior.push(*b);
@@ -287,6 +294,7 @@ pub fn measure(
             value: estimate.0,
             error: estimate.1,
         },
+        area_per_volume: area / core.iter().sum::<f64>(),
         feature,
         voxel,
         box_side: side,
@@ -672,6 +680,7 @@ fn connectivity(
         },
         closed_pores: c.closed_pores,
         percolates: c.percolates,
+        part_volume: total + c.pore_volume,
     })
 }
 
@@ -777,6 +786,15 @@ mod tests {
 }
 
 impl FillReport {
+    /// The surface a mesh of the fill will carry (mm^2): the infill's
+    /// surface per core volume times the part's volume (the skin's own
+    /// surfaces, a small share of a dense fill's, left out). An estimate
+    /// for sizing, not a figure to print.
+    pub fn surface_estimate(&self) -> Option<f64> {
+        let c = self.connectivity.as_ref()?;
+        Some(self.area_per_volume * c.part_volume)
+    }
+
     /// The report as JSON, with the keys `microfrep fill --json` prints
     /// (and `analyze --json` where they overlap: `volume_fraction`); what
     /// an output wrote is the caller's to add.
