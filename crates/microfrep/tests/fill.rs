@@ -293,3 +293,143 @@ fn irregular_pores_follow_the_parts_box_and_oversized_cells_are_refused() {
     o.seed = 1 << 60;
     assert!(fill(&part, &o, &quiet).is_err());
 }
+
+fn bone(name: &str) -> Option<String> {
+    let dir = std::env::var_os("MICROFREP_MESHES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes")
+        });
+    let p = dir.join(name);
+    if p.exists() {
+        Some(p.display().to_string())
+    } else if std::env::var_os("MICROFREP_MESHES").is_some() {
+        panic!("MICROFREP_MESHES is set but {} is absent", p.display());
+    } else {
+        eprintln!(
+            "SKIPPED: {} is absent (set MICROFREP_MESHES to the bone meshes)",
+            p.display()
+        );
+        None
+    }
+}
+
+/// Monte Carlo infill fraction of the core over `n` points of the box, with
+/// its standard error.
+fn monte_carlo_density(f: &microfrep::fill::Filled, n: usize, seed: u64) -> (f64, f64) {
+    let mut core = f.core.point();
+    let mut infill = f.infill.point();
+    let (mut inside, mut solid) = (0usize, 0usize);
+    for p in random_points(f.bounds, n, seed) {
+        if core.eval(p) > 0.0 {
+            inside += 1;
+            if infill.eval(p) > 0.0 {
+                solid += 1;
+            }
+        }
+    }
+    let r = solid as f64 / inside as f64;
+    (r, (r * (1.0 - r) / inside as f64).sqrt())
+}
+
+#[test]
+fn the_issues_bone_fills_agree_with_independent_measurements() {
+    let (Some(hip), Some(femur)) = (bone("hip.stl"), bone("femur.stl")) else {
+        return;
+    };
+    // The hip with a 0.25 Schwarz D sheet of 6 mm cells in a 1.5 mm skin (a
+    // thin part: no whole cell fits inside its core).
+    let part = Part::load(&hip, &LoadOptions::default(), None, &quiet).unwrap();
+    let mut opts = FillOptions::new(
+        Structure::Tpms {
+            kind: microfrep::structures::tpms::Tpms::SchwarzD,
+            sheet: true,
+        },
+        6.0,
+        0.25,
+    );
+    opts.skin = Some(1.5);
+    let f = fill(&part, &opts, &quiet).unwrap();
+    let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
+    let (mc, se) = monte_carlo_density(&f, 600_000, 7);
+    assert!(
+        (r.density.value - mc).abs() < r.density.error + 3.0 * se,
+        "report {:?}, Monte Carlo {mc} ± {se}",
+        r.density
+    );
+    assert!((r.density.value - 0.25).abs() < 0.01, "{:?}", r.density);
+    // The sheet's thickness: chords along the infill's gradient through
+    // random points of the sheet, bisected to its two faces.
+    let mut inf = f.infill.point();
+    let mut core = f.core.point();
+    let mut chords = Vec::new();
+    for p in random_points(f.bounds, 4_000_000, 11) {
+        if chords.len() >= 400 {
+            break;
+        }
+        if core.eval(p) < 3.0 || inf.eval(p) <= 0.0 {
+            continue;
+        }
+        let e = 1e-4;
+        let g: [f64; 3] = std::array::from_fn(|a| {
+            let (mut hi, mut lo) = (p, p);
+            hi[a] += e;
+            lo[a] -= e;
+            (inf.eval(hi) - inf.eval(lo)) / (2.0 * e)
+        });
+        let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        if n == 0.0 {
+            continue;
+        }
+        let mut reach = |s: f64| {
+            let at = |t: f64| std::array::from_fn(|a| p[a] + s * t * g[a] / n);
+            let (mut a, mut b) = (0.0, 0.01);
+            while inf.eval(at(b)) > 0.0 && b < 5.0 {
+                a = b;
+                b *= 1.5;
+            }
+            for _ in 0..40 {
+                let m = 0.5 * (a + b);
+                if inf.eval(at(m)) > 0.0 {
+                    a = m
+                } else {
+                    b = m
+                }
+            }
+            a
+        };
+        chords.push(reach(1.0) + reach(-1.0));
+    }
+    assert!(chords.len() >= 200, "{} chords", chords.len());
+    let mean = chords.iter().sum::<f64>() / chords.len() as f64;
+    let t = r.thinnest.clone().expect("the hip's sheet is measured");
+    eprintln!(
+        "hip: density {:?} vs Monte Carlo {mc} ± {se}; walls {t:?} vs chords {mean}",
+        r.density
+    );
+    assert!(
+        (t.mean - mean).abs() < 0.1 * mean,
+        "report {t:?}, chords mean {mean}"
+    );
+    assert!(t.min <= mean && t.min > 0.5 * mean, "{t:?} vs {mean}");
+
+    // The femur with a 0.2 octet of 8 mm cells: strut diameter and density.
+    let part = Part::load(&femur, &LoadOptions::default(), None, &quiet).unwrap();
+    let k = microfrep::structures::struts::StrutLattice::Octet;
+    let f = fill(
+        &part,
+        &FillOptions::new(Structure::Struts(k), 8.0, 0.2),
+        &quiet,
+    )
+    .unwrap();
+    let r = f.measure(&MeasureOptions::default(), &quiet).unwrap();
+    let (mc, se) = monte_carlo_density(&f, 600_000, 5);
+    assert!(
+        (r.density.value - mc).abs() < r.density.error + 3.0 * se,
+        "report {:?}, Monte Carlo {mc} ± {se}",
+        r.density
+    );
+    let dia = 2.0 * f.design.strut_radius.unwrap();
+    let t = r.thinnest.unwrap();
+    assert!((t.min - dia).abs() < 0.1 * dia, "{t:?} vs diameter {dia}");
+}

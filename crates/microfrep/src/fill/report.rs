@@ -163,6 +163,9 @@ pub struct FillReport {
     pub voxel: f64,
     /// Side of the cubes.
     pub box_side: f64,
+    /// Side of the cubes the walls and pores were measured in (the density
+    /// cubes', or a half or quarter of it in a thin part).
+    pub thickness_side: f64,
     /// Cubes measured for the density.
     pub boxes: usize,
     /// Cubes (wholly inside the core) measured for the thickness.
@@ -252,12 +255,41 @@ pub fn measure(
     if inf.len() < opts.min_boxes {
         estimate = ratio(&inf, &core, meas_err);
     }
+    // A thin part (a pelvis, a plate) may hold no cube of a whole cell:
+    // then the walls are measured in the halves and quarters of the
+    // density cubes that it holds.
+    let mut thickness_side = side;
+    for k in [2usize, 4] {
+        if !interior.is_empty() {
+            break;
+        }
+        thickness_side = side / k as f64;
+        'cubes: for b in boxes.iter().take(opts.max_boxes * 4) {
+            for i in 0..k * k * k {
+                let o = [i % k, (i / k) % k, i / (k * k)];
+                let lo: [f64; 3] = std::array::from_fn(|a| b[0][a] + o[a] as f64 * thickness_side);
+                let sub = [lo, lo.map(|v| v + thickness_side)];
+                if wholly_inside(&f.core, &grown(&sub, 0.25)) {
+                    interior.push(sub);
+                    if interior.len() >= opts.thickness_boxes {
+                        break 'cubes;
+                    }
+                }
+            }
+        }
+    }
     let (thinnest, pores) = thickness(f, &interior, voxel, progress)?;
     if interior.is_empty() {
         notes.push(
-            "no cube of one cell lies wholly inside the core: wall and pore sizes not measured"
+            "no cube of a quarter cell lies wholly inside the core: wall and pore sizes not \
+             measured"
                 .into(),
         );
+    } else if thickness_side < side {
+        notes.push(format!(
+            "walls and pores measured in cubes of {thickness_side:.4} (no cube of one cell lies \
+             wholly inside the core): pores larger than that read small"
+        ));
     }
     let skin = match (&f.skin, f.options.skin) {
         (Some(s), Some(t)) => Some(skin_rays(f, s, t, opts.rays)?),
@@ -298,6 +330,7 @@ pub fn measure(
         feature,
         voxel,
         box_side: side,
+        thickness_side,
         boxes: inf.len(),
         thickness_boxes: interior.len(),
         thinnest,
@@ -830,7 +863,8 @@ impl FillReport {
             })),
             "measured": {
                 "voxel": self.voxel, "cube": self.box_side, "cubes": self.boxes,
-                "thickness_cubes": self.thickness_boxes, "feature": self.feature,
+                "thickness_cubes": self.thickness_boxes, "thickness_cube": self.thickness_side,
+                "feature": self.feature,
                 "seconds": self.seconds,
             },
             "notes": f.notes.iter().chain(&self.notes).collect::<Vec<_>>(),
