@@ -3,8 +3,9 @@
 //!
 //! - **Voxel size.** The thinnest designed feature `f` (the strut diameter
 //!   where it is known in closed form, else the 10th percentile of the
-//!   wall thickness measured in a pilot cell at a 32nd of the cell; the skin
-//!   if thinner) sets the voxel: `f / voxels_across` (default 14).
+//!   wall thickness measured in a pilot cell at a 32nd of the cell) sets
+//!   the voxel: `f / voxels_across` (default 14). The skin, measured by
+//!   rays, does not; the connectivity grid resolves the thinner of the two.
 //! - **Density.** Cubes of one cell side, their centres on a fixed
 //!   low-discrepancy sequence over the part's box grown by half a cube, so
 //!   every point of the core is equally likely to be covered: the density
@@ -157,7 +158,8 @@ pub struct FillReport {
     /// Surface of the infill per volume of the core in the density cubes
     /// (1/mm): with the part's volume, what sizes a mesh before it is made.
     pub area_per_volume: f64,
-    /// The thinnest designed feature the voxels were sized from.
+    /// The thinnest designed feature of the infill, which the voxels were
+    /// sized from.
     pub feature: f64,
     /// Voxel size of the density and thickness cubes.
     pub voxel: f64,
@@ -295,12 +297,15 @@ pub fn measure(
         (Some(s), Some(t)) => Some(skin_rays(f, s, t, opts.rays)?),
         _ => None,
     };
-    let connectivity = connectivity(f, feature, opts.connectivity_voxels, progress)?;
+    // The connectivity grid must resolve the skin too (it decides whether
+    // the skin seals the pores).
+    let resolve = f.options.skin.map_or(feature, |t| feature.min(t));
+    let connectivity = connectivity(f, resolve, opts.connectivity_voxels, progress)?;
     let sealed = f.skin.as_ref().map(|_| connectivity.open_fraction < 1e-3);
     if !connectivity.resolved {
         notes.push(format!(
             "connectivity measured at {:.4} voxels, more than half the thinnest feature \
-             ({feature:.4}): the part is too large for a finer grid within the budget",
+             ({resolve:.4}): the part is too large for a finer grid within the budget",
             connectivity.voxel
         ));
     }
@@ -362,10 +367,10 @@ fn ratio(a: &[f64], b: &[f64], m: f64) -> (f64, f64) {
     (r, 2.0 * se + m / sb)
 }
 
-/// The thinnest designed feature: the strut diameter, or the 10th
-/// percentile of the walls in a pilot cell; the skin where thinner.
+/// The thinnest designed feature of the infill: the strut diameter, or the
+/// 10th percentile of the walls in a pilot cell.
 fn designed_feature(f: &Filled, side: f64) -> Result<f64, FillError> {
-    let mut feat = match (f.options.structure, f.design.strut_radius) {
+    let feat = match (f.options.structure, f.design.strut_radius) {
         (Structure::Struts(_), Some(r)) => 2.0 * r,
         _ => {
             let b = place_boxes(f, side, 64)
@@ -390,9 +395,6 @@ fn designed_feature(f: &Filled, side: f64) -> Result<f64, FillError> {
             }
         }
     };
-    if let Some(t) = f.options.skin {
-        feat = feat.min(t);
-    }
     Ok(feat.max(side / 128.0))
 }
 
