@@ -6,6 +6,8 @@
 //!   removed ([`atomic::cleanup_all`], called by the CLI's signal handler),
 //!   and an output that would replace one of the run's inputs is refused;
 //!   large files go to the disk by direct I/O (Linux) as they are written.
+//! - [`bounded`]: reading files, lines and streams with a bound on what
+//!   is read (devices and pipes report no size).
 //! - [`png`]: the one PNG encoder and decoder (grey 1 and 8 bit, RGB, RGBA).
 //! - [`mod@format`]: output formats behind one trait, chosen by file extension
 //!   from a registry, so that a new format plugs in without touching the
@@ -37,6 +39,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+pub mod bounded;
 pub mod colormap;
 pub mod format;
 pub mod limits;

@@ -18,6 +18,12 @@ pub fn memory_limit() -> Option<f64> {
     candidates.into_iter().flatten().reduce(f64::min)
 }
 
+/// The budget of a reader or a build that is given none: 80 % of
+/// [`memory_limit`], else 4 GiB.
+pub fn default_memory_budget() -> u64 {
+    memory_limit().map(|m| (0.8 * m) as u64).unwrap_or(4 << 30)
+}
+
 /// `MemAvailable` from /proc/meminfo.
 pub fn meminfo_available() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/meminfo").ok()?;

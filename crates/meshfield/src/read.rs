@@ -186,6 +186,20 @@ impl Default for ReadOptions {
     }
 }
 
+/// Whether `m` is a named pipe, which is read (bounded, as it has no
+/// size) where a device is refused.
+fn is_fifo(m: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileTypeExt::is_fifo(&m.file_type())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = m;
+        false
+    }
+}
+
 /// Mesh file formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -237,9 +251,14 @@ pub fn read_mesh_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<TriM
     if format == Format::ThreeMf {
         return Err(err(ReadErrorKind::NotYetSupported("3MF")));
     }
-    let size = std::fs::metadata(path)
-        .map_err(|e| err(ReadErrorKind::Io(e)))?
-        .len();
+    let meta = std::fs::metadata(path).map_err(|e| err(ReadErrorKind::Io(e)))?;
+    if !(meta.is_file() || is_fifo(&meta)) {
+        return Err(err(ReadErrorKind::Io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a device or a folder); a mesh is read from a file or a pipe",
+        ))));
+    }
+    let size = meta.len();
     // The file, plus a mesh of at most ~2x its size (binary STL: 84 bytes of
     // mesh per 50 of file; text formats are larger per triangle).
     let need = size.saturating_mul(3);
@@ -250,7 +269,10 @@ pub fn read_mesh_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<TriM
             limit: opts.memory_limit,
         }));
     }
-    let data = std::fs::read(path).map_err(|e| err(ReadErrorKind::Io(e)))?;
+    // What is read is bounded too: a device or a pipe (a link to /dev/zero
+    // named z.stl) reports a size of 0 and never ends.
+    let data = microfrep_io::bounded::read_file(path, opts.memory_limit / 3)
+        .map_err(|e| err(ReadErrorKind::Io(e)))?;
     parse(format, &data).map_err(err)
 }
 
@@ -766,6 +788,11 @@ pub fn parse_ply(data: &[u8]) -> Result<TriMesh, ReadErrorKind> {
                     .ok()
                     .and_then(|s| s.parse::<u64>().ok())
                     .ok_or_else(|| syntax(line, format!("bad element count '{}'", show(count))))?;
+                // A second element of a name would leave which one holds
+                // the mesh to guesswork.
+                if elements.iter().any(|e| e.name == *name) {
+                    return Err(syntax(line, format!("a second element '{}'", show(name))));
+                }
                 elements.push(PlyElement {
                     name: name.to_vec(),
                     count,
@@ -801,6 +828,16 @@ pub fn parse_ply(data: &[u8]) -> Result<TriMesh, ReadErrorKind> {
                         ty: PlyType::parse(t).ok_or_else(bad)?,
                     }
                 };
+                if el.props.iter().any(|q| q.name == prop.name) {
+                    return Err(syntax(
+                        line,
+                        format!(
+                            "a second property '{}' in element '{}'",
+                            show(&prop.name),
+                            show(&el.name)
+                        ),
+                    ));
+                }
                 el.props.push(prop);
             }
             Some(b"end_header") => break,
@@ -901,7 +938,10 @@ pub fn parse_ply(data: &[u8]) -> Result<TriMesh, ReadErrorKind> {
                         if !(0.0..=1e6).contains(&n) {
                             return Err(ReadErrorKind::Syntax {
                                 at,
-                                message: format!("{inside}: list length {n} is out of range"),
+                                message: format!(
+                                    "{inside}: list length {n} is out of range (a whole number \
+                                     from 0 to 1000000)"
+                                ),
                             });
                         }
                         let take = is_face && Some(pi) == face_list;
@@ -911,6 +951,16 @@ pub fn parse_ply(data: &[u8]) -> Result<TriMesh, ReadErrorKind> {
                         for _ in 0..n as usize {
                             let v = reader.scalar(p.ty, &inside)?;
                             if take {
+                                // An index is a whole number: a fraction or
+                                // NaN (which `as` would make 0) is an error.
+                                if !(v.is_finite() && v.fract() == 0.0 && v.abs() < 1e18) {
+                                    return Err(ReadErrorKind::Syntax {
+                                        at,
+                                        message: format!(
+                                            "{inside}: vertex index {v} is not a whole number"
+                                        ),
+                                    });
+                                }
                                 corners.push(v as i64);
                             }
                         }
@@ -1241,6 +1291,60 @@ mod tests {
     }
 
     #[test]
+    fn ply_refuses_repeated_names_and_fractional_indices() {
+        let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\n";
+        let verts = "0 0 0\n1 0 0\n0 1 0\n";
+        let face = "element face 1\nproperty list uchar int vertex_index\n";
+        let ply = |extra: &str, body: &str| format!("{head}{extra}end_header\n{verts}{body}");
+        // The well-formed file reads.
+        let m = parse_ply(ply(face, "3 0 1 2\n").as_bytes()).unwrap();
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+        // A second element of a name.
+        let e = parse_ply(ply(&format!("{face}{face}"), "3 0 1 2\n3 0 1 2\n").as_bytes());
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "line 9: a second element 'face'"
+        );
+        // A second property of a name.
+        let e = parse_ply(
+            ply(
+                "element face 1\nproperty uchar n\nproperty uchar n\n",
+                "1 1\n",
+            )
+            .as_bytes(),
+        );
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "line 9: a second property 'n' in element 'face'"
+        );
+        // A list length out of range; a list length of a float type.
+        let e = parse_ply(ply(&face.replace("uchar", "uint"), "2000000 0 1 2\n").as_bytes());
+        let e = e.unwrap_err().to_string();
+        assert!(
+            e.starts_with("line 13: face 0: list length 2000000 is out of range"),
+            "{e}"
+        );
+        let e = parse_ply(ply(&face.replace("uchar", "float"), "3 0 1 2\n").as_bytes());
+        let e = e.unwrap_err().to_string();
+        assert!(e.starts_with("line 8: bad property"), "{e}");
+        // An index that is not a whole number.
+        for bad in ["1.5", "nan", "inf"] {
+            let e =
+                parse_ply(ply(&face.replace("int", "float"), &format!("3 0 {bad} 2\n")).as_bytes());
+            let e = e.unwrap_err().to_string();
+            assert!(
+                e.starts_with("line 13: face 0: vertex index")
+                    && e.ends_with("is not a whole number"),
+                "{bad}: {e}"
+            );
+        }
+        // Whole numbers in a float list are indices as any.
+        let m = parse_ply(ply(&face.replace("int", "float"), "3 0 1 2\n").as_bytes()).unwrap();
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    }
+
+    #[test]
     fn dispatch_by_extension() {
         let e = read_mesh("part.3mf").unwrap_err();
         assert!(e.to_string().contains("not yet supported here"), "{e}");
@@ -1249,6 +1353,22 @@ mod tests {
             e.to_string().contains("unknown mesh format \".xyz\""),
             "{e}"
         );
+        // A device under a mesh's name is refused, not read forever.
+        #[cfg(unix)]
+        if Path::new("/dev/zero").exists() {
+            let dir = std::env::temp_dir().join(format!("mf-read-dev-{}", std::process::id()));
+            std::fs::create_dir_all(&dir).unwrap();
+            let z = dir.join("z.stl");
+            let _ = std::fs::remove_file(&z);
+            std::os::unix::fs::symlink("/dev/zero", &z).unwrap();
+            let e = read_mesh(&z).unwrap_err();
+            let _ = std::fs::remove_dir_all(&dir);
+            let text = format!("{e}: {}", std::error::Error::source(&e).unwrap());
+            assert!(
+                text.contains("z.stl: cannot read the file: not a regular file"),
+                "{text}"
+            );
+        }
         let e = read_mesh("/nonexistent/part.stl").unwrap_err();
         assert!(matches!(e.kind, ReadErrorKind::Io(_)));
         assert!(std::error::Error::source(&e).is_some());

@@ -69,7 +69,7 @@ pub fn plan_bytes(dims: [usize; 3], spacing: [f64; 3], smooth_mm: f64) -> u64 {
     let n = dims.iter().map(|&d| d as u64).product::<u64>();
     let plane = (dims[0] * dims[1]) as u64;
     let smooth = if smooth_mm > 0.0 {
-        let r = smooth::radius(smooth_mm, spacing[2]) as u64;
+        let r = smooth::radius(smooth_mm, spacing[2], dims[2]) as u64;
         n * 4 + (2 * r + 2) * plane * 4
     } else {
         0
@@ -116,12 +116,7 @@ impl ScanField {
                 opts.iso
             )));
         }
-        if !(opts.smooth.is_finite() && opts.smooth >= 0.0) {
-            return Err(ScanError::Invalid(format!(
-                "smoothing must be a non-negative width in mm, got {}",
-                opts.smooth
-            )));
-        }
+        smooth::check_width(opts.smooth, vol.dims, vol.spacing).map_err(ScanError::Invalid)?;
         let need = plan_bytes(vol.dims, vol.spacing, opts.smooth);
         if need > opts.memory_limit {
             return Err(too_large_field(vol, need, opts.memory_limit));
@@ -332,6 +327,10 @@ fn box_interval(b: [Interval; 3], lo: [f64; 3], hi: [f64; 3]) -> Interval {
 impl Field for ScanField {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn is_signed_distance(&self) -> bool {
+        true
     }
 
     fn eval(&self, p: [f64; 3]) -> f64 {

@@ -175,6 +175,55 @@ pub fn read_nrrd(path: &Path, opts: &ReadOptions, progress: Progress) -> Result<
     asm.finish()
 }
 
+/// Where a field is in the header (`line 7`), for errors.
+fn field_line(h: &Header, field: &str) -> String {
+    format!("line {}", h.lines.get(field).copied().unwrap_or(1))
+}
+
+/// The size of a detached data file, which must be a regular file: a
+/// device or a pipe has no size to check against the header, and skipping
+/// or reading it may never end.
+fn regular_len(hdr_path: &Path, h: &Header, src: &Path, f: &File) -> Result<u64> {
+    let m = f.metadata().map_err(io_at(src))?;
+    if !m.is_file() {
+        return Err(header(
+            hdr_path,
+            field_line(h, "data file"),
+            format!(
+                "{} is not a regular file (a device, a pipe or a folder); copy the voxel data \
+                 into a file and name that",
+                src.display()
+            ),
+        ));
+    }
+    Ok(m.len())
+}
+
+/// A byte skip must lie inside the data: within the file for raw data, and
+/// within the most its compressed bytes can expand to for gzip (deflate
+/// expands at most 1032-fold), so that skipping is bounded by the file.
+fn check_byte_skip(hdr_path: &Path, h: &Header, encoding: Encoding, len: u64) -> Result<()> {
+    if h.byte_skip <= 0 {
+        return Ok(());
+    }
+    let skip = h.byte_skip as u64;
+    let room = match encoding {
+        Encoding::Gzip => len.saturating_mul(1032),
+        _ => len,
+    };
+    if skip > room {
+        return Err(header(
+            hdr_path,
+            field_line(h, "byte skip"),
+            format!(
+                "byte skip {skip} is beyond the {} bytes of data there can be (the file has {len} bytes)",
+                room
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Opens the decoded data stream of one source; returns it with the byte
 /// offset (in the decoded stream) where the voxels start.
 fn open_data(
@@ -190,9 +239,10 @@ fn open_data(
         rest
     } else {
         let f = File::open(src).map_err(io_at(src))?;
+        let len = regular_len(hdr_path, h, src, &f)?;
+        check_byte_skip(hdr_path, h, encoding, len)?;
         if h.byte_skip == -1 && encoding == Encoding::Raw {
             // The data is the last `bytes` bytes of the file.
-            let len = f.metadata().map_err(io_at(src))?.len();
             if len < bytes {
                 return Err(ScanError::Truncated {
                     path: src.to_path_buf(),
@@ -212,7 +262,7 @@ fn open_data(
         if encoding != Encoding::Raw {
             return Err(header(
                 hdr_path,
-                "byte skip",
+                field_line(h, "byte skip"),
                 "byte skip -1 is only allowed with raw encoding",
             ));
         }
@@ -229,10 +279,24 @@ fn open_data(
         std::io::copy(&mut (&mut r).take(skip), &mut std::io::sink()).map_err(io_at(src))?;
         return Ok((Box::new(r), len - bytes));
     }
-    for _ in 0..h.line_skip {
-        let mut line = Vec::new();
-        let n = r.read_until(b'\n', &mut line).map_err(io_at(src))?;
-        offset += n as u64;
+    if attached {
+        let len = std::fs::metadata(src).map_err(io_at(src))?.len();
+        check_byte_skip(hdr_path, h, encoding, len)?;
+    }
+    for k in 0..h.line_skip {
+        let n = microfrep_io::bounded::skip_line(&mut r, u64::MAX).map_err(io_at(src))?;
+        if n == 0 {
+            return Err(header(
+                hdr_path,
+                field_line(h, "line skip"),
+                format!(
+                    "line skip {} but {} ends after {k} lines",
+                    h.line_skip,
+                    src.display()
+                ),
+            ));
+        }
+        offset += n;
     }
     let mut stream: Box<dyn Read> = match encoding {
         Encoding::Raw => r,
@@ -288,8 +352,14 @@ fn read_text(
         } else {
             None
         };
-        let (mut s, _) = open_data(path, src, own, h, Encoding::Text, 0)?;
-        s.read_to_string(&mut text).map_err(io_at(src))?;
+        let (s, _) = open_data(path, src, own, h, Encoding::Text, 0)?;
+        // Bounded by what is read: the size on disk says nothing for a
+        // device or a pipe.
+        let left = (opts.memory_limit / 2).saturating_sub(text.len() as u64);
+        let data = microfrep_io::bounded::read_all(s, left).map_err(io_at(src))?;
+        let data = String::from_utf8(data)
+            .map_err(|_| header(path, "data", "text-encoded voxel data is not UTF-8 text"))?;
+        text.push_str(&data);
     }
     let mut words = text.split_ascii_whitespace();
     let mut plane = vec![0.0f64; nx * ny];

@@ -261,3 +261,52 @@ fn progress_reaches_its_total_and_builds_are_deterministic() {
     let b = ScanField::build(&vol, &ScanOptions::new(0.0)).unwrap();
     assert_eq!(a.distances(), b.distances());
 }
+
+#[test]
+fn smoothing_wider_than_the_scan_is_refused_and_the_field_is_a_distance() {
+    // 8 x 8 x 6 samples 0.5 mm apart: 3.5 mm across the longest side.
+    let vol = ct_ball([8, 8, 6], [0.5; 3], [0.0; 3], [1.75, 1.75, 1.25], 1.2);
+    for w in [3.6, 1e6, 1e300, f64::MAX] {
+        let mut o = ScanOptions::new(0.0);
+        o.smooth = w;
+        match ScanField::build(&vol, &o) {
+            Err(e @ ScanError::Invalid(_)) => {
+                let t = e.to_string();
+                assert!(
+                    t.contains("wider than the whole scan") && t.contains("3.5 mm"),
+                    "{t}"
+                );
+            }
+            other => panic!("smooth {w}: {other:?}"),
+        }
+    }
+    for w in [-0.1, f64::NAN, f64::INFINITY] {
+        let mut o = ScanOptions::new(0.0);
+        o.smooth = w;
+        let e = ScanField::build(&vol, &o).unwrap_err().to_string();
+        assert!(e.contains("non-negative"), "{w}: {e}");
+    }
+    // A width of the scan's extent is not refused as too wide (it blurs
+    // this small ball away, which is a different error).
+    let mut o = ScanOptions::new(0.0);
+    o.smooth = 3.5;
+    if let Err(e) = ScanField::build(&vol, &o) {
+        assert!(!e.to_string().contains("wider than"), "{e}");
+    }
+    // A sensible width builds, and the value is a signed distance
+    // (positive inside), as the Field trait declares.
+    o.smooth = 0.3;
+    let f = ScanField::build(&vol, &o).unwrap();
+    assert!(f.is_signed_distance());
+    let vol = ct_ball([24; 3], [0.5; 3], [0.0; 3], [6.0; 3], 3.0);
+    let f = ScanField::build(&vol, &ScanOptions::new(0.0)).unwrap();
+    assert!(f.is_signed_distance());
+    for (p, want) in [
+        ([6.0, 6.0, 6.0], 3.0),
+        ([7.0, 6.0, 6.0], 2.0),
+        ([10.5, 6.0, 6.0], -1.5),
+    ] {
+        let v = f.eval(p);
+        assert!((v - want).abs() < 0.15, "{v} at {p:?}, want {want}");
+    }
+}

@@ -259,6 +259,56 @@ fn nrrd_errors_name_the_line_and_the_sizes() {
     assert!(
         matches!(Volume::open(&p, &ReadOptions::default()), Err(ScanError::Io { path, .. }) if path.ends_with("nowhere.raw"))
     );
+    // A line skip past the end of a detached data file.
+    std::fs::write(d.join("lines.raw"), b"one\ntwo\n").unwrap();
+    let p = d.join("lineskip.nhdr");
+    let h = nrrd_header(
+        &g,
+        "short",
+        "raw",
+        "little",
+        "data file: lines.raw\nline skip: 5\n",
+    );
+    std::fs::write(&p, &h).unwrap();
+    let e = Volume::open(&p, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(":line 13: line skip 5 but") && e.contains("lines.raw ends after 2 lines"),
+        "{e}"
+    );
+    // A byte skip beyond the data file, raw and gzip.
+    std::fs::write(d.join("data.raw"), &vals).unwrap();
+    let p = d.join("byteskip.nhdr");
+    let skip = 2 * n;
+    let h = nrrd_header(
+        &g,
+        "short",
+        "raw",
+        "little",
+        &format!("data file: data.raw\nbyte skip: {skip}\n"),
+    );
+    std::fs::write(&p, &h).unwrap();
+    let e = Volume::open(&p, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(":line 13: byte skip") && e.contains(&format!("the file has {n} bytes")),
+        "{e}"
+    );
+    // A detached data file that is a device: refused, not read forever.
+    if Path::new("/dev/zero").exists() {
+        let p = d.join("device.nhdr");
+        let h = nrrd_header(&g, "short", "raw", "little", "data file: /dev/zero\n");
+        std::fs::write(&p, &h).unwrap();
+        let e = Volume::open(&p, &ReadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("device.nhdr:line 12:") && e.contains("/dev/zero is not a regular file"),
+            "{e}"
+        );
+    }
     // Truncated gzip stream: an error, not a panic.
     let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
     gz.write_all(&vals).unwrap();
