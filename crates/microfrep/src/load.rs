@@ -162,6 +162,17 @@ pub enum LoadError {
     /// A 3MF package is malformed.
     #[error(transparent)]
     ThreeMf(#[from] microfrep_3mf::Error),
+    /// A 3MF package read as an input part is malformed or too large: the
+    /// package's error (which names the part and the byte in it) under
+    /// the file's name.
+    #[error("{path}: {source}")]
+    ThreeMfFile {
+        /// The package.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: microfrep_3mf::Error,
+    },
     /// A volume image is malformed or too large.
     #[error(transparent)]
     Scan(#[from] microfrep_scan::ScanError),
@@ -188,8 +199,7 @@ pub enum LoadError {
 
 fn limit(opts: &LoadOptions) -> u64 {
     opts.memory_limit
-        .or_else(|| microfrep_io::limits::memory_limit().map(|m| (0.8 * m) as u64))
-        .unwrap_or(4 << 30)
+        .unwrap_or_else(microfrep_io::limits::default_memory_budget)
 }
 
 /// What kind a path names, by its extension (or a folder: a scan).
@@ -421,7 +431,15 @@ fn mesh_field(
     use microfrep_meshfield::{BuildOptions, MeshField, SignMethod, TriMesh};
     src.check_keys(&["weld", "sign"])?;
     let mesh = if src.path.to_ascii_lowercase().ends_with(".3mf") {
-        let parts = microfrep_3mf::read_meshes(path)?;
+        let opts = microfrep_3mf::ReadOptions { memory_limit };
+        let parts = microfrep_3mf::read_meshes_with(path, &opts).map_err(|e| match e {
+            // Already names the file.
+            e @ microfrep_3mf::Error::Io { .. } => LoadError::ThreeMf(e),
+            e => LoadError::ThreeMfFile {
+                path: path.to_path_buf(),
+                source: e,
+            },
+        })?;
         let mut v = Vec::new();
         let mut t = Vec::new();
         for p in parts {
@@ -469,6 +487,13 @@ fn mesh_field(
         notes.push(format!(
             "{} triangles were flipped to make the orientation consistent",
             f.flipped()
+        ));
+    }
+    if let Some(v) = f.inverted() {
+        notes.push(format!(
+            "the mesh was inside out (closed, but its triangles face inwards: signed volume {}); \
+             it was turned over",
+            microfrep_io::text::sig(v, 4)
         ));
     }
     let bb = f.bbox();
@@ -561,6 +586,62 @@ mod tests {
         assert!(s.options.is_empty());
         assert!(Source::parse("x.stl:weld").unwrap().options.is_empty());
         assert!(Source::parse("x.stl:weld=1,sign").is_err());
+    }
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("microfrep-load-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join(name)
+    }
+
+    #[test]
+    fn inside_out_meshes_are_turned_over_with_a_note() {
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        // Outward faces reversed: closed, coherent, inside out.
+        let faces = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
+        let mut stl = String::from("solid t\n");
+        for f in faces {
+            stl += "facet normal 0 0 0\nouter loop\n";
+            for i in f {
+                let p: [f64; 3] = v[i];
+                stl += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
+            }
+            stl += "endloop\nendfacet\n";
+        }
+        stl += "endsolid t\n";
+        let p = temp("inside-out.stl");
+        std::fs::write(&p, stl).unwrap();
+        let l = load(p.to_str().unwrap(), &LoadOptions::default()).unwrap();
+        let note = l.notes.iter().find(|n| n.contains("inside out"));
+        assert!(
+            note.is_some_and(|n| n.contains("signed volume -0.1667")),
+            "{:?}",
+            l.notes
+        );
+        // Turned over: the inside is inside.
+        let mut pe = l.shape.point();
+        let inside = pe.eval([0.1, 0.1, 0.1]);
+        let outside = pe.eval([1.0, 1.0, 1.0]);
+        assert!(inside > 0.0 && outside < 0.0, "{inside} {outside}");
+    }
+
+    #[test]
+    fn bad_3mf_parts_are_named_with_the_file() {
+        let p = temp("not-a-zip.3mf");
+        std::fs::write(&p, b"PK\x03\x04 this is no zip").unwrap();
+        let e = load(p.to_str().unwrap(), &LoadOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.starts_with(&format!("{}: the archive: zip archive error", p.display())),
+            "{e}"
+        );
     }
 
     #[test]

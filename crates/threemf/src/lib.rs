@@ -46,13 +46,16 @@ pub mod write;
 
 pub use beam::{Ball, BallMode, Beam, BeamLattice, BeamSet, Cap, ClipMode};
 pub use error::{Error, Result};
-pub use flatten::{lattices, meshes, read_beam_lattices, read_meshes, NamedLattice, NamedMesh};
+pub use flatten::{
+    expansion, lattices, lattices_with, meshes, meshes_with, read_beam_lattices, read_meshes,
+    read_meshes_with, Expansion, NamedLattice, NamedMesh,
+};
 pub use implicit::{ImplicitFunction, ImplicitGraph, ImplicitNode};
 pub use model::{
     Base, BaseMaterials, BuildItem, ColorGroup, Component, CompositeMaterials, Mesh,
     MeshResolution, Metadata, Model, Object, ObjectContent, ObjectType, Transform,
     TriangleProperties, Unit,
 };
-pub use read::{read_file, read_from};
+pub use read::{read_file, read_file_with, read_from, read_from_with, ReadOptions};
 pub use slice::{Polygon, Slice, SliceStack};
 pub use write::{validate, write_file, write_to, WriteOptions};

@@ -23,26 +23,166 @@ use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read, Seek};
 use std::path::Path;
 
+/// Limits of a read.
+#[derive(Clone, Debug)]
+pub struct ReadOptions {
+    /// Most bytes the model read (and, in [`crate::flatten`], its flattened
+    /// geometry) may take.
+    pub memory_limit: u64,
+}
+
+impl Default for ReadOptions {
+    /// 80 % of what the process may allocate, else 4 GiB
+    /// ([`microfrep_io::limits::default_memory_budget`]).
+    fn default() -> Self {
+        ReadOptions {
+            memory_limit: microfrep_io::limits::default_memory_budget(),
+        }
+    }
+}
+
 /// Reads the package at `path`.
 pub fn read_file(path: impl AsRef<Path>) -> Result<Model> {
+    read_file_with(path, &ReadOptions::default())
+}
+
+/// [`read_file`] with limits.
+pub fn read_file_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Model> {
     let path = path.as_ref();
-    let f = std::fs::File::open(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.display().to_string(),
         source,
-    })?;
-    read_from(f)
+    };
+    let f = std::fs::File::open(path).map_err(io)?;
+    // A zip is read by seeking from its end: that needs a regular file.
+    if !f.metadata().map_err(io)?.is_file() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a device, a pipe or a folder); a 3MF package is a zip file",
+        )));
+    }
+    read_from_with(f, opts)
 }
 
 /// Reads a package from a seekable stream.
 pub fn read_from<R: Read + Seek>(r: R) -> Result<Model> {
+    read_from_with(r, &ReadOptions::default())
+}
+
+/// The most bytes of model a part of `declared` uncompressed bytes can
+/// give: every array element in memory has at least half as many bytes of
+/// XML (a 24-byte vertex needs 27, a 12-byte triangle 33), components
+/// (which are counted while reading, like everything else) aside.
+fn predicted_from_xml(declared: u64) -> u64 {
+    declared / 2
+}
+
+/// A part's bytes, refused once they pass the size its zip entry declares
+/// (so the declared size, checked before reading, bounds what is read).
+struct Declared<R> {
+    inner: R,
+    left: u64,
+    part: String,
+}
+
+impl<R: Read> Read for Declared<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if n as u64 > self.left {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "/{} holds more bytes than its zip entry declares",
+                    self.part
+                ),
+            ));
+        }
+        self.left -= n as u64;
+        Ok(n)
+    }
+}
+
+/// Checks a part's declared uncompressed size against what may still be
+/// used, before reading it; gives its reader, bounded by that size.
+fn open_counted<'a, R: Read + Seek>(
+    zip: &'a mut zip::ZipArchive<R>,
+    part: &str,
+    context: &str,
+    predicted: impl Fn(u64) -> u64,
+    budget: &Budget,
+) -> Result<Declared<zip::read::ZipFile<'a, R>>> {
+    let f = open_part(zip, part, context)?;
+    let declared = f.size();
+    budget.check(part, predicted(declared), || {
+        format!("its zip entry declares {declared} bytes uncompressed")
+    })?;
+    Ok(Declared {
+        inner: f,
+        left: declared,
+        part: part.to_string(),
+    })
+}
+
+/// Bytes a read may still take, shared by the parts of a package.
+#[derive(Clone, Debug)]
+struct Budget {
+    limit: u64,
+    used: std::cell::Cell<u64>,
+}
+
+impl Budget {
+    fn new(limit: u64) -> Budget {
+        Budget {
+            limit,
+            used: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Refuses `more` bytes when they would pass the limit.
+    fn check(&self, part: &str, more: u64, why: impl Fn() -> String) -> Result<()> {
+        let need = self.used.get().saturating_add(more);
+        if need > self.limit {
+            return Err(Error::TooLarge {
+                part: format!("/{part}"),
+                message: format!(
+                    "reading it needs about {} MiB ({}), more than the {} MiB this job may \
+                     use (the memory limit); use a machine with more memory or a smaller model",
+                    need >> 20,
+                    why(),
+                    self.limit >> 20
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// Takes `more` bytes, refusing them when they would pass the limit.
+    fn take(&self, part: &str, more: u64, why: impl Fn() -> String) -> Result<()> {
+        self.check(part, more, why)?;
+        self.used.set(self.used.get() + more);
+        Ok(())
+    }
+}
+
+/// [`read_from`] with limits: each part's declared size is checked
+/// against the memory limit before it is read, what is read is bounded by
+/// that size, and the arrays are counted against the limit as they grow.
+pub fn read_from_with<R: Read + Seek>(r: R, opts: &ReadOptions) -> Result<Model> {
     let mut zip = zip::ZipArchive::new(r).map_err(|source| Error::Zip {
         part: "the archive".into(),
         source,
     })?;
+    let budget = Budget::new(opts.memory_limit);
     let root = find_root(&mut zip)?;
     let (mut model, refs) = {
-        let f = open_part(&mut zip, &root, "_rels/.rels (StartPart)")?;
-        parse_model(BufReader::new(f), &root)?
+        let f = open_counted(
+            &mut zip,
+            &root,
+            "_rels/.rels (StartPart)",
+            predicted_from_xml,
+            &budget,
+        )?;
+        parse_model(BufReader::new(f), &root, &budget)?
     };
     // Slices kept in other parts.
     for (stack_id, refs) in refs.slice_refs {
@@ -50,8 +190,8 @@ pub fn read_from<R: Read + Seek>(r: R) -> Result<Model> {
         for (ref_id, path, offset) in refs {
             let part = path.trim_start_matches('/').to_string();
             let ctx = format!("sliceref of slicestack {stack_id} in /{root}");
-            let f = open_part(&mut zip, &part, &ctx)?;
-            let (sub, subrefs) = parse_model(BufReader::new(f), &part)?;
+            let f = open_counted(&mut zip, &part, &ctx, predicted_from_xml, &budget)?;
+            let (sub, subrefs) = parse_model(BufReader::new(f), &part, &budget)?;
             if !subrefs.slice_refs.is_empty() {
                 return Err(invalid(
                     &part,
@@ -100,7 +240,7 @@ pub fn read_from<R: Read + Seek>(r: R) -> Result<Model> {
         for (k, path) in im.sheet_paths.iter().enumerate() {
             let part = path.trim_start_matches('/').to_string();
             let ctx = format!("imagesheet {k} of image3d {} in /{root}", im.id);
-            let f = open_part(&mut zip, &part, &ctx)?;
+            let f = open_counted(&mut zip, &part, &ctx, |_| 0, &budget)?;
             let (l, d, data) = decode_sheet(BufReader::new(f), &part, nx, ny)?;
             if layout.is_some_and(|x| x != l) || (depth != 0 && depth != d) {
                 return Err(invalid(
@@ -110,7 +250,11 @@ pub fn read_from<R: Read + Seek>(r: R) -> Result<Model> {
                 ));
             }
             if samples.is_empty() {
-                samples.reserve(nx * ny * expected[2] * l.channels());
+                let n = (nx * ny * expected[2] * l.channels()) as u64;
+                budget.take(&part, n * 2, || {
+                    format!("image3d {} of {expected:?} samples", im.id)
+                })?;
+                samples.reserve(n as usize);
             }
             layout = Some(l);
             depth = d;
@@ -413,6 +557,11 @@ struct Attr {
 
 struct Parser<'p> {
     part: &'p str,
+    /// Memory the package may still take; every array element is counted
+    /// twice its size (a growing vector holds up to twice its length).
+    budget: &'p Budget,
+    /// Resource ids seen, which must be unique in a model part.
+    ids: std::collections::HashSet<u32>,
     off: u64,
     model: Model,
     refs: Refs,
@@ -438,11 +587,13 @@ struct Parser<'p> {
     text: String,
 }
 
-fn parse_model<R: BufRead>(r: R, part: &str) -> Result<(Model, Refs)> {
+fn parse_model<R: BufRead>(r: R, part: &str, budget: &Budget) -> Result<(Model, Refs)> {
     let mut reader = NsReader::from_reader(r);
     reader.config_mut().expand_empty_elements = false;
     let mut p = Parser {
         part,
+        budget,
+        ids: std::collections::HashSet::new(),
         off: 0,
         model: Model::default(),
         refs: Refs::default(),
@@ -645,6 +796,25 @@ impl Parser<'_> {
         invalid(self.part, self.off, msg)
     }
 
+    /// Counts one more array element of type `T` against the budget.
+    fn charge<T>(&self, what: &str) -> Result<()> {
+        let off = self.off;
+        self.budget
+            .take(self.part, 2 * std::mem::size_of::<T>() as u64, || {
+                format!("the {what}s up to byte {off}")
+            })
+    }
+
+    /// Records a resource id, refusing one used before in this part.
+    fn resource_id(&mut self, id: u32, kind: &str) -> Result<()> {
+        if !self.ids.insert(id) {
+            return Err(self.err(format!(
+                "{kind} id {id} is already the id of another resource (ids must be unique)"
+            )));
+        }
+        Ok(())
+    }
+
     fn attrs<R>(&self, reader: &NsReader<R>, e: &BytesStart) -> Result<Vec<Attr>> {
         let mut v = Vec::new();
         for a in e.attributes() {
@@ -733,6 +903,7 @@ impl Parser<'_> {
                     let n = self.mesh.as_ref().map_or(0, |m| m.vertices.len());
                     return Err(self.err(format!("vertex {n} lacks x, y or z")));
                 }
+                self.charge::<[f64; 3]>("vertice")?;
                 self.mesh.as_mut().expect("inside a mesh").vertices.push(p);
                 return Ok(Skip);
             }
@@ -765,6 +936,7 @@ impl Parser<'_> {
                     return Err(self.err(format!("triangle {k} repeats a vertex: {t:?}")));
                 }
                 mesh.triangles.push(t);
+                self.charge::<[u32; 6]>("triangle")?;
                 // Properties are kept when the whole mesh uses one group.
                 if let (Some(pid), true) = (pid, pr[0] != u32::MAX) {
                     let q = [
@@ -826,6 +998,7 @@ impl Parser<'_> {
                 if !(r1v > 0.0 && r2v > 0.0) {
                     return Err(self.err(format!("beam {k}: radii must be positive")));
                 }
+                self.charge::<Beam>("beam")?;
                 self.lattice.as_mut().unwrap().beams.push(Beam {
                     v1,
                     v2,
@@ -857,6 +1030,7 @@ impl Parser<'_> {
                     )
                 })?;
                 g.colors.push(c);
+                self.charge::<[u8; 4]>("colour")?;
                 return Ok(Skip);
             }
             (SliceVertices, Ns::Slice, "vertex") => {
@@ -873,6 +1047,7 @@ impl Parser<'_> {
                 if p.iter().any(|c| c.is_nan()) {
                     return Err(self.err("slice vertex lacks x or y"));
                 }
+                self.charge::<[f64; 2]>("slice vertice")?;
                 self.slice_vertices.push(p);
                 return Ok(Skip);
             }
@@ -890,6 +1065,7 @@ impl Parser<'_> {
                         self.slice_vertices.len()
                     )));
                 }
+                self.charge::<[f64; 3]>("polygon segment")?;
                 self.polygon.as_mut().expect("inside a polygon").1.push(v2);
                 return Ok(Skip);
             }
@@ -934,6 +1110,7 @@ impl Parser<'_> {
                     Some(t) => parse_transform(part, off, t)?,
                     None => Transform::IDENTITY,
                 };
+                self.charge::<BuildItem>("build item")?;
                 self.model.build.push(BuildItem {
                     object,
                     transform,
@@ -943,6 +1120,7 @@ impl Parser<'_> {
             }
             (Resources, Ns::Core, "basematerials") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "basematerials")?;
                 self.model.base_materials.push(crate::model::BaseMaterials {
                     id,
                     bases: Vec::new(),
@@ -981,6 +1159,7 @@ impl Parser<'_> {
             }
             (Resources, Ns::Material, "compositematerials") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "compositematerials")?;
                 let matid = parse_id(part, off, "matid", need("matid")?)?;
                 let idx = need("matindices")?
                     .split_ascii_whitespace()
@@ -1011,6 +1190,7 @@ impl Parser<'_> {
             }
             (Resources, Ns::Material, "colorgroup") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "colorgroup")?;
                 self.model.color_groups.push(crate::model::ColorGroup {
                     id,
                     colors: Vec::new(),
@@ -1019,6 +1199,7 @@ impl Parser<'_> {
             }
             (Resources, Ns::Core, "object") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "object")?;
                 let kind = match get("type") {
                     Some(t) => ObjectType::from_name(t.trim())
                         .ok_or_else(|| self.err(format!("unknown object type \"{t}\"")))?,
@@ -1077,6 +1258,7 @@ impl Parser<'_> {
                     Some(t) => parse_transform(part, off, t)?,
                     None => Transform::IDENTITY,
                 };
+                self.charge::<Component>("component")?;
                 self.components.push(Component { object, transform });
                 Skip
             }
@@ -1166,6 +1348,7 @@ impl Parser<'_> {
                     )));
                 }
                 let r = get("r").map(|v| parse_num(part, off, "r", v)).transpose()?;
+                self.charge::<Ball>("ball")?;
                 self.lattice
                     .as_mut()
                     .unwrap()
@@ -1185,16 +1368,19 @@ impl Parser<'_> {
             }
             (BeamSet, Ns::Beam, "ref") => {
                 let i = parse_index(part, off, "index", need("index")?)?;
+                self.charge::<u32>("beam reference")?;
                 self.beamset.as_mut().unwrap().beams.push(i);
                 Skip
             }
             (BeamSet, Ns::Balls | Ns::Beam, "ballref") => {
                 let i = parse_index(part, off, "index", need("index")?)?;
+                self.charge::<u32>("ball reference")?;
                 self.beamset.as_mut().unwrap().balls.push(i);
                 Skip
             }
             (Resources, Ns::Slice, "slicestack") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "slicestack")?;
                 let zbottom = get("zbottom")
                     .map(|v| parse_num(part, off, "zbottom", v))
                     .transpose()?
@@ -1249,6 +1435,7 @@ impl Parser<'_> {
             }
             (Resources, Ns::Volumetric, "image3d") => {
                 let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "image3d")?;
                 self.image = Some(crate::volumetric::Image3D {
                     id,
                     name: get("name").map(str::to_string),
@@ -1285,6 +1472,8 @@ impl Parser<'_> {
                 Skip
             }
             (Resources, Ns::Volumetric, "functionfromimage3d") => {
+                let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "functionfromimage3d")?;
                 let tile = |k: &str| -> Result<TileStyle> {
                     match get(k) {
                         None => Ok(TileStyle::Wrap),
@@ -1293,7 +1482,7 @@ impl Parser<'_> {
                     }
                 };
                 self.model.image_functions.push(FunctionFromImage3D {
-                    id: parse_id(part, off, "id", need("id")?)?,
+                    id,
                     display_name: get("displayname").map(str::to_string),
                     image: parse_id(part, off, "image3did", need("image3did")?)?,
                     filter: match get("filter").map(str::trim) {
@@ -1318,8 +1507,10 @@ impl Parser<'_> {
                 Skip
             }
             (Resources, Ns::Volumetric, "volumedata") => {
+                let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "volumedata")?;
                 self.volume = Some(crate::volumetric::VolumeData {
-                    id: parse_id(part, off, "id", need("id")?)?,
+                    id,
                     ..Default::default()
                 });
                 VolumeData
@@ -1355,8 +1546,10 @@ impl Parser<'_> {
                 Skip
             }
             (Resources, Ns::Implicit, "implicitfunction") => {
+                let id = parse_id(part, off, "id", need("id")?)?;
+                self.resource_id(id, "implicitfunction")?;
                 self.function = Some(ImplicitFunction {
-                    id: parse_id(part, off, "id", need("id")?)?,
+                    id,
                     display_name: get("displayname").map(str::to_string),
                     inputs: Vec::new(),
                     graph: ImplicitGraph::default(),
