@@ -401,9 +401,6 @@ fn check_mesh_size(r: &FillReport, b: Bounds, n: usize) -> Result<()> {
     let longest = b.size().iter().copied().fold(0.0, f64::max);
     let h = longest / n as f64;
     let triangles = TRIANGLES_PER_CELL_AREA * area / (h * h);
-    if std::env::var_os("MICROFREP_FILL_DEBUG").is_some() {
-        eprintln!("estimated triangles {triangles:.0} (area {area:.1} mm^2, cell {h})");
-    }
     let need = triangles * CHECK_BYTES_PER_TRIANGLE;
     let limit = microfrep::io::limits::memory_limit().unwrap_or(f64::INFINITY);
     if need > limit {
