@@ -178,16 +178,10 @@ pub enum MeshError {
 
 /// Memory limits.
 pub mod memory {
-    /// Default limit: 80 % of the memory the system reports available
-    /// (`MemAvailable` in /proc/meminfo), or 8 GiB where that is unknown.
+    /// Default limit: the readers' shared budget, 80 % of what the process
+    /// may allocate (available memory, cgroup, `ulimit -v`), else 4 GiB
+    /// ([`microfrep_io::limits::default_memory_budget`]).
     pub fn default_limit() -> u64 {
-        std::fs::read_to_string("/proc/meminfo")
-            .ok()
-            .and_then(|s| {
-                s.lines()
-                    .find_map(|l| l.strip_prefix("MemAvailable:"))
-                    .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-            })
-            .map_or(8 << 30, |kib| kib * 1024 / 10 * 8)
+        microfrep_io::limits::default_memory_budget()
     }
 }
