@@ -447,7 +447,12 @@ fn mesh_checked(
     };
     let s = microfrep::mesh::job::mesh_to_file(&f.model, &mo, &staged, &job, &|_, _| {})
         .map_err(|e| anyhow::anyhow!("{e}").context(format!("meshing {}", a.output.display())))?;
-    let shells = microfrep::fill::report::mesh_shells(&staged)?;
+    // Counted by the mesher on its indexed output (read back only if it
+    // could not count).
+    let shells = match s.shells {
+        Some(n) => n,
+        None => microfrep::fill::report::mesh_shells(&staged)?,
+    };
     if f.skin.is_some() && shells < 2 {
         bail!(
             "the written mesh has {shells} shell(s): a skinned part needs its outer and inner \

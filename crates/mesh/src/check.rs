@@ -1229,3 +1229,90 @@ mod tests {
         assert_eq!((r.duplicate_vertices, r.degenerate), (1, 1));
     }
 }
+
+/// Connected shells of a mesh (triangles joined through shared vertex
+/// indices), counted as the mesh comes: a union-find over the vertices,
+/// four bytes each, fed batch by batch in any order. Vertices no triangle
+/// uses are not shells.
+#[derive(Default)]
+pub struct ShellCensus {
+    /// Parent of each vertex; a root is its own parent.
+    parent: Vec<u32>,
+    /// Whether a triangle used the vertex.
+    used: Vec<bool>,
+    /// Triangles naming a vertex not received (the count is then unknown).
+    unknown: bool,
+}
+
+impl ShellCensus {
+    /// An empty census.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The next `n` vertices arrive.
+    pub fn vertices(&mut self, n: usize) {
+        let start = self.parent.len() as u32;
+        self.parent.extend(start..start + n as u32);
+        self.used.resize(self.parent.len(), false);
+    }
+
+    fn find(&mut self, mut i: u32) -> u32 {
+        while self.parent[i as usize] != i {
+            let g = self.parent[self.parent[i as usize] as usize];
+            self.parent[i as usize] = g;
+            i = g;
+        }
+        i
+    }
+
+    /// The next triangles.
+    pub fn triangles(&mut self, t: &[[u32; 3]]) {
+        let n = self.parent.len() as u32;
+        for tri in t {
+            if tri.iter().any(|&v| v >= n) {
+                self.unknown = true;
+                continue;
+            }
+            for &v in tri {
+                self.used[v as usize] = true;
+            }
+            self.join(tri);
+        }
+    }
+
+    /// Joins the corners of one triangle: the larger root under the
+    /// smaller.
+    fn join(&mut self, tri: &[u32; 3]) {
+        for &v in &tri[1..] {
+            let a = self.find(tri[0]);
+            let b = self.find(v);
+            if a != b {
+                let (r, c) = if a < b { (a, b) } else { (b, a) };
+                self.parent[c as usize] = r;
+            }
+        }
+    }
+
+    /// The shells, or `None` when a triangle named a vertex never received.
+    pub fn finish(mut self) -> Option<usize> {
+        if self.unknown {
+            return None;
+        }
+        let mut n = 0;
+        for i in 0..self.parent.len() as u32 {
+            if self.used[i as usize] && self.find(i) == i {
+                n += 1;
+            }
+        }
+        Some(n)
+    }
+}
+
+/// Shells of an indexed mesh (see [`ShellCensus`]).
+pub fn shells(mesh: &crate::Mesh) -> usize {
+    let mut c = ShellCensus::new();
+    c.vertices(mesh.vertices.len());
+    c.triangles(&mesh.triangles);
+    c.finish().unwrap_or(0)
+}

@@ -122,6 +122,10 @@ pub struct Summary {
     pub bad_edges: Option<usize>,
     /// Euler characteristic V - E + F (as `bad_edges`).
     pub euler: Option<i64>,
+    /// Connected shells (triangles joined through shared vertices),
+    /// counted from the mesher's indexed output; `None` for a streamed
+    /// mesh.
+    pub shells: Option<usize>,
     /// Signed volume by the divergence theorem.
     pub volume: f64,
     /// Surface area.
@@ -261,7 +265,9 @@ pub fn mesh_to_file(
         };
         file.commit()?;
         let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
-        summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
+        let mut s = summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false);
+        s.shells = m.shells;
+        s
     } else {
         // Edges counted while meshing (from the bricks), except for a mesh
         // the resolution search kept.
@@ -304,14 +310,16 @@ pub fn mesh_to_file(
         };
         verdict(&t, sampled.as_ref())?;
         let file = file?;
-        let (committed, (edges, bad_edges)) = std::thread::scope(|sc| {
+        let (committed, (edges, bad_edges), shells) = std::thread::scope(|sc| {
             let sync = sc.spawn(move || file.commit());
             let e = counted.unwrap_or_else(|| crate::check::edges(&mesh));
-            (sync.join(), e)
+            (sync.join(), e, crate::check::shells(&mesh))
         });
         committed.map_err(|_| MeshError::Internal("the file sync thread panicked".into()))??;
         let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;
-        summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false)
+        let mut s = summary_of(&opts, &plan, &t, Some((bad_edges, euler)), predicted, false);
+        s.shells = Some(shells);
+        s
     };
     s.thin_cells = plan.thin_cells();
     s.runtime_errors = error_census(shape, &plan);
@@ -358,6 +366,7 @@ fn summary_of(
         vertices: t.vertices,
         bad_edges: checked.map(|c| c.0),
         euler: checked.map(|c| c.1),
+        shells: None,
         volume: t.volume,
         area: t.area,
         bbox: t.bbox,

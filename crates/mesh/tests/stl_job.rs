@@ -126,3 +126,34 @@ fn a_failed_stl_job_leaves_nothing_behind() {
     assert!(entries(&d).is_empty(), "{:?}", entries(&d));
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// A hollow ball (outer and inner surface) beside a solid one: three
+/// shells, counted by the job as the mesh comes, the same for the STL job,
+/// for a format written from memory, and by hand from the welded mesh.
+#[test]
+fn jobs_count_the_shells_of_what_they_write() {
+    let p = Expr::xyz();
+    let s = microfrep_shapes::v3;
+    let hollow = microfrep_shapes::sphere(&p, &s([0.0; 3]), 5.0).min(-microfrep_shapes::sphere(
+        &p,
+        &s([0.0; 3]),
+        3.0,
+    ));
+    let solid = microfrep_shapes::sphere(&p, &s([9.0, 0.0, 0.0]), 2.0);
+    let shape = Shape::new(hollow.max(solid));
+    let opts = MeshOptions::new([[-6.0, -6.0, -6.0], [12.0, 6.0, 6.0]], 60);
+    let d = dir("shells");
+    let mesh = Plan::new(&shape, &opts).unwrap().run(&|_| {}).unwrap();
+    assert_eq!(microfrep_mesh::check::shells(&mesh), 3);
+    for name in ["a.stl", "a.obj", "a.ply"] {
+        let out = d.join(name);
+        let r = mesh_to_file(&shape, &opts, &out, &JobOptions::default(), &|_, _| {}).unwrap();
+        assert_eq!(r.shells, Some(3), "{name}");
+    }
+    // One ball: one shell.
+    let one = Shape::new(microfrep_shapes::sphere(&p, &s([0.0; 3]), 5.0));
+    let out = d.join("b.stl");
+    let r = mesh_to_file(&one, &opts, &out, &JobOptions::default(), &|_, _| {}).unwrap();
+    assert_eq!(r.shells, Some(1));
+    let _ = std::fs::remove_dir_all(&d);
+}

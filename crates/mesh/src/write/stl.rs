@@ -118,6 +118,8 @@ pub(crate) struct StlJob<'a> {
     /// How many of `waiting` the census has seen.
     counted: usize,
     census: EdgeCensus,
+    /// Connected shells, as the triangles come.
+    shells: crate::check::ShellCensus,
     triangles: u64,
     /// Bounding box of the vertices, in f32 (exact: the same as in f64).
     bbox: [[f32; 3]; 2],
@@ -137,6 +139,7 @@ impl<'a> StlJob<'a> {
             waiting: Vec::new(),
             counted: 0,
             census: EdgeCensus::new(),
+            shells: crate::check::ShellCensus::new(),
             triangles: 0,
             bbox: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
         })
@@ -192,6 +195,7 @@ impl<'a> StlJob<'a> {
             measured: self.enc.total(),
             bbox: [lo.map(|c| c as f64), hi.map(|c| c as f64)],
             edges: self.census.finish(),
+            shells: self.shells.finish(),
         })
     }
 }
@@ -206,6 +210,8 @@ pub(crate) struct StlJobSummary {
     /// Edges and bad edges; `None` when the mesh did not come in the order
     /// the census relies on (count them with [`crate::check::edges`]).
     pub(crate) edges: Option<(usize, usize)>,
+    /// Connected shells (`None` if a triangle named an unknown vertex).
+    pub(crate) shells: Option<usize>,
 }
 
 impl MeshSink for StlJob<'_> {
@@ -215,6 +221,7 @@ impl MeshSink for StlJob<'_> {
             self.catch_up(false).map_err(MeshError::Stream)?;
         }
         self.census.vertices(v.len());
+        self.shells.vertices(v.len());
         self.vertices.extend_from_slice(v);
         let [lo, hi] = &mut self.bbox;
         let (l, h) = bounds_of(v);
@@ -227,6 +234,7 @@ impl MeshSink for StlJob<'_> {
 
     fn triangles(&mut self, t: &[[u32; 3]], _: &VertexWindow) -> Result<(), MeshError> {
         self.waiting.extend_from_slice(t);
+        self.shells.triangles(t);
         self.triangles += t.len() as u64;
         if self.waiting.len() >= Self::step() {
             self.catch_up(false).map_err(MeshError::Stream)?;
