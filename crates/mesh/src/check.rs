@@ -1309,7 +1309,8 @@ impl ShellCensus {
     }
 }
 
-/// Shells of an indexed mesh (see [`ShellCensus`]).
+/// Shells of an indexed mesh (see [`ShellCensus`]); 0 if a triangle names
+/// a vertex the mesh lacks.
 pub fn shells(mesh: &crate::Mesh) -> usize {
     let mut c = ShellCensus::new();
     c.vertices(mesh.vertices.len());

@@ -731,8 +731,11 @@ pub fn mesh_shells(path: &std::path::Path) -> Result<usize, FillError> {
             .iter()
             .map(|m| {
                 let t = microfrep_meshfield::TriMesh::new(m.vertices.clone(), m.triangles.clone());
-                t.map(|t| shell_count(t.weld(0.0).0.vertices.len(), &t.weld(0.0).0.triangles))
-                    .unwrap_or(0)
+                t.map(|t| {
+                    let (w, _) = t.weld(0.0);
+                    shell_count(w.vertices.len(), &w.triangles)
+                })
+                .unwrap_or(0)
             })
             .sum());
     }
@@ -741,32 +744,14 @@ pub fn mesh_shells(path: &std::path::Path) -> Result<usize, FillError> {
     Ok(shell_count(m.vertices.len(), &m.triangles))
 }
 
-/// Connected components of triangles joined through shared vertices.
+/// Connected components of triangles joined through shared vertices (the
+/// mesher's census, see [`microfrep_mesh::check::ShellCensus`]; a triangle
+/// naming a vertex past `vertices` counts as no shell).
 pub fn shell_count(vertices: usize, triangles: &[[u32; 3]]) -> usize {
-    let mut parent: Vec<u32> = (0..vertices as u32).collect();
-    fn find(p: &mut [u32], mut i: u32) -> u32 {
-        while p[i as usize] != i {
-            p[i as usize] = p[p[i as usize] as usize];
-            i = p[i as usize];
-        }
-        i
-    }
-    let mut used = vec![false; vertices];
-    for t in triangles {
-        for &v in t {
-            used[v as usize] = true;
-        }
-        let a = find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = find(&mut parent, v);
-            if a != b {
-                parent[b as usize] = a;
-            }
-        }
-    }
-    (0..vertices as u32)
-        .filter(|&i| used[i as usize] && find(&mut parent, i) == i)
-        .count()
+    let mut c = microfrep_mesh::check::ShellCensus::new();
+    c.vertices(vertices);
+    c.triangles(triangles);
+    c.finish().unwrap_or(0)
 }
 
 #[cfg(test)]
