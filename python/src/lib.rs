@@ -1,13 +1,15 @@
 //! The extension module `microfrep._core`: the Rust side of the Python
-//! package `microfrep`. The Python layer (`python/microfrep/`) wraps these
-//! classes and functions, records how each model was built (so a model can
-//! be pickled and rebuilt on a Dask worker) and holds the documented API;
-//! this module is kept thin: conversions, the GIL released around every
-//! long call, and errors turned into the package's exception classes.
+//! package `microfrep`. The Python layer (`python/python/microfrep/`) wraps
+//! these classes and functions, records how each model was built (so a
+//! model can be pickled and rebuilt on a Dask worker) and holds the
+//! documented API; this module is kept thin: conversions, the GIL released
+//! around every long call, and errors turned into the package's exception
+//! classes.
 //!
-//! Build and install it with `pip install ./python` (maturin, from the
-//! repository root) and use it through the Python package, not this module
-//! directly. The crate is a `cdylib` needing a Python interpreter, so its
+//! Build it as a wheel with `scripts/test-python` (maturin, into
+//! `target/wheels`) or install it from source with `pip install ./python`
+//! (from the repository root), and use it through the Python package, not
+//! this module directly. The crate is a `cdylib` needing a Python interpreter, so its
 //! example is Python rather than a Rust doc test (the package's own tests,
 //! `python/tests/`, exercise these calls):
 //!
