@@ -7,7 +7,9 @@
 
 use crate::errors;
 use crate::model::{check_box, PyExpr, PyShape};
-use microfrep::fill::{self, Density, FillError, FillOptions, Filled, MeasureOptions, Part, Structure};
+use microfrep::fill::{
+    self, Density, FillError, FillOptions, Filled, MeasureOptions, Part, Structure,
+};
 use microfrep::Bounds;
 use pyo3::prelude::*;
 
@@ -137,7 +139,6 @@ fn fill_part(
     })
 }
 
-
 impl PyFilled {
     /// One of the fill's shapes, named after the part in messages.
     fn shape(&self, s: microfrep::Shape, what: &str) -> PyShape {
@@ -171,10 +172,7 @@ impl PyFilled {
     /// The skin alone, if any.
     #[getter]
     fn skin(&self) -> Option<PyShape> {
-        self.f
-            .skin
-            .clone()
-            .map(|s| self.shape(s, "skin"))
+        self.f.skin.clone().map(|s| self.shape(s, "skin"))
     }
     /// Warnings of the part and the fill.
     #[getter]

@@ -3,6 +3,7 @@
 //! (see `microfrep_analysis::partial`). What crosses processes is plain
 //! data: tuples, lists and NumPy arrays, which pickle.
 
+use crate::arrays;
 use crate::errors;
 use crate::fab::analysis_grid;
 use crate::model::PyShape;
@@ -191,17 +192,20 @@ fn slab_of(d: &Bound<'_, PyDict>) -> PyResult<SlabLabels> {
         d.get_item(k)?
             .ok_or_else(|| errors::input(format!("slab labels lack '{k}'")))
     };
+    let py = d.py();
     let vec_u8 = |k: &str| -> PyResult<Vec<u8>> {
-        Ok(get(k)?
-            .extract::<PyReadonlyArray1<u8>>()?
-            .as_slice()?
-            .to_vec())
+        Ok(
+            arrays::vector::<u8>(py, &get(k)?, &format!("slab labels' {k}"))?
+                .as_slice()?
+                .to_vec(),
+        )
     };
     let vec_u32 = |k: &str| -> PyResult<Vec<u32>> {
-        Ok(get(k)?
-            .extract::<PyReadonlyArray1<u32>>()?
-            .as_slice()?
-            .to_vec())
+        Ok(
+            arrays::vector::<u32>(py, &get(k)?, &format!("slab labels' {k}"))?
+                .as_slice()?
+                .to_vec(),
+        )
     };
     let p: Vec<bool> = get("percolates")?.extract()?;
     if p.len() != 3 {
@@ -211,10 +215,13 @@ fn slab_of(d: &Bound<'_, PyDict>) -> PyResult<SlabLabels> {
         k0: get("k0")?.extract()?,
         k1: get("k1")?.extract()?,
         inner: Connectivity {
-            solid_volumes: get("solid_volumes")?
-                .extract::<PyReadonlyArray1<f64>>()?
-                .as_slice()?
-                .to_vec(),
+            solid_volumes: arrays::vector::<f64>(
+                py,
+                &get("solid_volumes")?,
+                "slab labels' solid_volumes",
+            )?
+            .as_slice()?
+            .to_vec(),
             pore_components: get("pore_components")?.extract()?,
             pore_volume: get("pore_volume")?.extract()?,
             open_pore_volume: get("open_pore_volume")?.extract()?,
@@ -225,8 +232,7 @@ fn slab_of(d: &Bound<'_, PyDict>) -> PyResult<SlabLabels> {
         },
         euler8: get("euler8")?.extract()?,
         kinds: vec_u8("kinds")?,
-        counts: get("counts")?
-            .extract::<PyReadonlyArray1<u64>>()?
+        counts: arrays::vector::<u64>(py, &get("counts")?, "slab labels' counts")?
             .as_slice()?
             .to_vec(),
         flags: vec_u8("flags")?,
@@ -248,11 +254,7 @@ fn analysis_merge(
     voxel: Option<f64>,
     depth: u32,
     creased: usize,
-    bricks: Vec<(
-        PyReadonlyArray1<u64>,
-        PyReadonlyArray1<f64>,
-        PyReadonlyArray1<u8>,
-    )>,
+    bricks: Vec<(Bound<'_, PyAny>, Bound<'_, PyAny>, Bound<'_, PyAny>)>,
     labels: Option<Vec<Bound<'_, PyDict>>>,
     has_region: bool,
     name: &str,
@@ -262,7 +264,10 @@ fn analysis_merge(
     let g = analysis_grid(bounds, resolution, voxel)?;
     let mut all = Vec::new();
     for (i, v, s) in &bricks {
-        all.extend(from_arrays(i, v, s)?);
+        let i = arrays::vector::<u64>(py, i, "brick ids")?;
+        let v = arrays::vector::<f64>(py, v, "brick values")?;
+        let s = arrays::vector::<u8>(py, s, "brick sampled flags")?;
+        all.extend(from_arrays(&i, &v, &s)?);
     }
     let slabs = labels
         .map(|ls| ls.iter().map(slab_of).collect::<PyResult<Vec<_>>>())

@@ -8,14 +8,13 @@
 //! gathers one chunk of a few thousand points at a time into buffers that
 //! stay in cache, and the input is never copied whole.
 
+use crate::arrays;
 use crate::errors;
 use crate::model::PyShape;
 use microfrep::core::eval::BLOCK;
 use microfrep::core::{BatchEval, GradBatchEval, PointEval, Tape};
 use numpy::ndarray::{ArrayView2, Axis};
-use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods,
-};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
@@ -89,41 +88,32 @@ impl Points<'_> {
 }
 
 /// Borrows `obj` as points and runs `f` on them with the GIL released.
+/// An array that is not `N x 3` float32 or float64 is refused with what is
+/// wrong with it (see `arrays::check_points`).
 fn with_points<R: Send>(
     py: Python<'_>,
     obj: &Bound<'_, PyAny>,
     f: impl FnOnce(Points) -> R + Send,
 ) -> PyResult<R> {
-    let check = |shape: &[usize]| -> PyResult<()> {
-        if shape.len() != 2 || shape[1] != 3 {
-            return Err(errors::input(format!(
-                "points must be an N x 3 array, got shape {shape:?}"
-            )));
-        }
-        Ok(())
-    };
+    arrays::check_points(py, obj)?;
     if let Ok(a) = obj.downcast::<numpy::PyArray2<f32>>() {
-        check(a.shape())?;
-        let r: PyReadonlyArray2<f32> = a.readonly();
+        let r: PyReadonlyArray2<f32> = a
+            .try_readonly()
+            .map_err(|e| errors::input(format!("points: {e}")))?;
         let v = r.as_array();
         return Ok(py.allow_threads(|| f(Points::F32(v))));
     }
     if let Ok(a) = obj.downcast::<numpy::PyArray2<f64>>() {
-        check(a.shape())?;
-        let r: PyReadonlyArray2<f64> = a.readonly();
+        let r: PyReadonlyArray2<f64> = a
+            .try_readonly()
+            .map_err(|e| errors::input(format!("points: {e}")))?;
         let v = r.as_array();
         return Ok(py.allow_threads(|| f(Points::F64(v))));
     }
-    if let Ok(a) = obj.downcast::<numpy::PyUntypedArray>() {
-        return Err(errors::input(format!(
-            "points must be float32 or float64, got {} with shape {:?}",
-            a.dtype(),
-            a.shape()
-        )));
-    }
-    Err(errors::input(
-        "points must be a NumPy array (N x 3, float32 or float64)",
-    ))
+    Err(errors::input(format!(
+        "points: {} cannot be read as an N x 3 array of float32 or float64",
+        obj.repr().map(|r| r.to_string()).unwrap_or_default()
+    )))
 }
 
 /// Output `k` of `tape` at every point, in f32, on all threads.
@@ -336,10 +326,13 @@ impl PyShape {
 fn eval_points_par<'py>(
     py: Python<'py>,
     shape: &PyShape,
-    x: numpy::PyReadonlyArray1<'py, f32>,
-    y: numpy::PyReadonlyArray1<'py, f32>,
-    z: numpy::PyReadonlyArray1<'py, f32>,
+    x: &Bound<'py, PyAny>,
+    y: &Bound<'py, PyAny>,
+    z: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<f32>>> {
+    let x = arrays::vector::<f32>(py, x, "x")?;
+    let y = arrays::vector::<f32>(py, y, "y")?;
+    let z = arrays::vector::<f32>(py, z, "z")?;
     let (x, y, z) = (x.as_slice()?, y.as_slice()?, z.as_slice()?);
     if x.len() != y.len() || x.len() != z.len() {
         return Err(errors::input("x, y and z differ in length"));

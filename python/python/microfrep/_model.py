@@ -508,11 +508,30 @@ class Shape:
 
 
 def _points(points) -> np.ndarray:
-    a = points if isinstance(points, np.ndarray) else np.asarray(points)
+    """``points`` as an array the evaluators read: integers and other
+    real floats are converted to float64, a single point ``(3,)`` becomes
+    one row; what is left wrong (the number of dimensions, the last axis)
+    is reported by the Rust side, which names the problem."""
+    if isinstance(points, np.ndarray):
+        a = points
+    else:
+        try:
+            a = np.asarray(points)
+        except (ValueError, TypeError) as e:
+            raise _core.InputError(
+                f"points: cannot be made into an N x 3 array of numbers ({e}): "
+                "give rows of 3 coordinates, all of the same length"
+            ) from None
     if a.dtype != np.float32 and a.dtype != np.float64:
+        if a.dtype.kind == "c":
+            raise _core.InputError(f"points: dtype {a.dtype} (complex), expected real numbers (float32 or float64)")
         if a.dtype.kind not in "iuf":
-            raise _core.InputError(f"points must be numbers, got dtype {a.dtype}")
+            raise _core.InputError(
+                f"points: dtype {a.dtype}, expected numbers (float32 or float64; integers are converted)"
+            )
         a = a.astype(np.float64)
+    elif not a.flags.aligned:
+        a = a.copy()
     if a.ndim == 1 and a.shape[0] == 3:
         a = a.reshape(1, 3)
     return a
