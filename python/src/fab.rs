@@ -9,7 +9,7 @@ use microfrep::fab::{write_stack, Format, SliceGrid};
 use microfrep::io::{AtomicDir, AtomicFile};
 use microfrep::mesh::job::{mesh_to_file, JobOptions};
 use microfrep::mesh::{CellMethod, MeshOptions, Plan};
-use microfrep::render::{cutaway, ray_cast, section, Camera, Plane, View};
+use microfrep::render::{cutaway, ray_cast, section, Camera, Plane, RgbImage, View};
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -328,40 +328,32 @@ impl PyShape {
         cutaway: bool,
         section: Option<(usize, f64)>,
     ) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        microfrep::render::camera::check_size(width, height).map_err(errors::render)?;
-        let v = self::view(view)?;
-        let b = self.frame(py, bounds)?;
-        let (min, max) = (b.min, b.max);
-        let shape = self.s.clone();
-        let img = match section {
-            Some(_) if cutaway => return Err(errors::input("section and cutaway do not combine")),
-            Some((axis, value)) => {
-                if axis > 2 {
-                    return Err(errors::input(format!("section axis {axis}: 0, 1 or 2")));
-                }
-                if !(min[axis]..=max[axis]).contains(&value) {
-                    return Err(errors::input(format!(
-                        "section {value}: the plane is outside the box ({} .. {} on that axis)",
-                        min[axis], max[axis]
-                    )));
-                }
-                py.allow_threads(|| {
-                    self::section(&shape, Plane { axis, value }, min, max, width, height)
-                })
-            }
-            None => py.allow_threads(|| {
-                let s = if cutaway {
-                    self::cutaway(&shape, v, min, max)
-                } else {
-                    shape
-                };
-                ray_cast(&s, &Camera::fit(v, min, max, width, height), min, max)
-            }),
-        };
+        let img = self.render_image(py, width, height, view, bounds, cutaway, section)?;
         img.data
             .into_pyarray(py)
             .reshape([img.height, img.width, 3])
             .map_err(|e| errors::input(e.to_string()))
+    }
+
+    /// The same image as `render` gives, as the bytes of a PNG file (the
+    /// encoder of `microfrep render`).
+    #[pyo3(signature = (width=256, height=256, view="iso", bounds=None, cutaway=false, section=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn render_png<'py>(
+        &self,
+        py: Python<'py>,
+        width: usize,
+        height: usize,
+        view: &str,
+        bounds: Option<Box3>,
+        cutaway: bool,
+        section: Option<(usize, f64)>,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let img = self.render_image(py, width, height, view, bounds, cutaway, section)?;
+        let png = py
+            .allow_threads(|| img.encode_png())
+            .map_err(errors::render)?;
+        Ok(PyBytes::new(py, &png))
     }
 
     /// The analysis of `microfrep analyze`, as its JSON text.
@@ -534,4 +526,51 @@ fn check_output(path: &Path) -> PyResult<()> {
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<StackWriter>()?;
     Ok(())
+}
+
+impl PyShape {
+    /// The image of `render` and `render_png`, computed with the GIL
+    /// released.
+    #[allow(clippy::too_many_arguments)]
+    fn render_image(
+        &self,
+        py: Python<'_>,
+        width: usize,
+        height: usize,
+        view: &str,
+        bounds: Option<Box3>,
+        cutaway: bool,
+        section: Option<(usize, f64)>,
+    ) -> PyResult<RgbImage> {
+        microfrep::render::camera::check_size(width, height).map_err(errors::render)?;
+        let v = self::view(view)?;
+        let b = self.frame(py, bounds)?;
+        let (min, max) = (b.min, b.max);
+        let shape = self.s.clone();
+        Ok(match section {
+            Some(_) if cutaway => return Err(errors::input("section and cutaway do not combine")),
+            Some((axis, value)) => {
+                if axis > 2 {
+                    return Err(errors::input(format!("section axis {axis}: 0, 1 or 2")));
+                }
+                if !(min[axis]..=max[axis]).contains(&value) {
+                    return Err(errors::input(format!(
+                        "section {value}: the plane is outside the box ({} .. {} on that axis)",
+                        min[axis], max[axis]
+                    )));
+                }
+                py.allow_threads(|| {
+                    self::section(&shape, Plane { axis, value }, min, max, width, height)
+                })
+            }
+            None => py.allow_threads(|| {
+                let s = if cutaway {
+                    self::cutaway(&shape, v, min, max)
+                } else {
+                    shape
+                };
+                ray_cast(&s, &Camera::fit(v, min, max, width, height), min, max)
+            }),
+        })
+    }
 }

@@ -22,8 +22,10 @@ TPMS (:func:`tpms`, :func:`gyroid`, ...), strut lattices (:func:`struts`,
 CLI's fill, measured with :func:`fill_report`);
 expressions of :data:`x`, :data:`y`, :data:`z` for graded fields. Work:
 ``Shape.eval / eval_grid / gradient / attributes / mesh / mesh_to_file /
-slice / slice_to / render / analyze``. Distributed slicing and analysis:
-:mod:`microfrep.dask`. Errors: :class:`Error` and its subclasses.
+slice / slice_to / render / analyze``; in Jupyter a shape shows a small
+rendered image and its bounds, an :class:`AnalysisReport` a table.
+Distributed slicing and analysis: :mod:`microfrep.dask`. Errors:
+:class:`Error` and its subclasses.
 """
 
 from ._core import (
@@ -42,6 +44,7 @@ from ._core import (
 from ._model import (
     STRUT_KINDS,
     TPMS_KINDS,
+    AnalysisReport,
     Expr,
     Shape,
     acos,

@@ -67,6 +67,15 @@ class Shape:
         cutaway: bool = False,
         section: Optional[Tuple[int, float]] = None,
     ) -> npt.NDArray[np.uint8]: ...
+    def render_png(
+        self,
+        width: int = 256,
+        height: int = 256,
+        view: str = "iso",
+        bounds: Optional[Box3] = None,
+        cutaway: bool = False,
+        section: Optional[Tuple[int, float]] = None,
+    ) -> bytes: ...
     def analyze(
         self,
         resolution: Optional[int] = None,

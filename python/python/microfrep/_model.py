@@ -11,7 +11,9 @@ arguments of a primitive or a lattice).
 
 from __future__ import annotations
 
+import base64
 import functools
+import html
 import json
 import math
 import os
@@ -295,11 +297,12 @@ class Shape:
     :meth:`slice_to`, measure with :meth:`analyze`. Shapes pickle as their
     recipe (see the module docs), so they can be sent to Dask workers."""
 
-    __slots__ = ("_s", "_recipe")
+    __slots__ = ("_s", "_recipe", "_preview_cache")
 
     def __init__(self, s: "_core.Shape"):
         self._s = s
         self._recipe = None
+        self._preview_cache = None
 
     def __reduce__(self):
         if self._recipe is None:
@@ -504,7 +507,185 @@ class Shape:
         voxels on the longest side of the box."""
         r = region._s if region is not None else None
         s = self._s.analyze(resolution, voxel, _box(bounds), r, connectivity, thickness)
-        return json.loads(s)
+        return AnalysisReport(json.loads(s))
+
+    # -- notebook display (IPython, Jupyter)
+    def render_png(self, size: Sequence[int] = (256, 256), view: str = "iso", bounds: Optional[Box] = None) -> bytes:
+        """The image of :meth:`render` as the bytes of a PNG file."""
+        w, h = (int(v) for v in size)
+        return self._s.render_png(w, h, view, _box(bounds))
+
+    def _preview(self):
+        """``(png or None, bounds or None, why no image or None)`` for the
+        notebook display, computed once per shape; never raises: a shape
+        without bounds, or one that cannot be rendered, is described."""
+        cached = getattr(self, "_preview_cache", None)
+        if cached is not None:
+            return cached
+        png, box, why = None, None, None
+        try:
+            lo, hi = self.bounds()
+        except _core.BoundsError:
+            why = (
+                "bounds unknown: interval analysis cannot bound this model (it may be unbounded, "
+                "like a bare lattice); give them with shape.with_bounds((lo, hi)) to see it"
+            )
+        except Exception as e:  # the display must not fail
+            why = f"bounds unknown: {type(e).__name__}: {e}"
+        else:
+            box = (lo, hi)
+            if not all(math.isfinite(v) for v in lo + hi):
+                why = "bounds are not finite; give them with shape.with_bounds((lo, hi)) to see it"
+            else:
+                try:
+                    png = self._s.render_png(_PREVIEW_SIZE, _PREVIEW_SIZE, "iso", box)
+                except Exception as e:
+                    why = f"no image: {type(e).__name__}: {e}"
+        out = (png, box, why)
+        try:
+            self._preview_cache = out
+        except AttributeError:
+            pass
+        return out
+
+    def _repr_png_(self) -> Optional[bytes]:
+        """A 256 x 256 iso view for IPython (None when there is none)."""
+        return self._preview()[0]
+
+    def _repr_html_(self) -> str:
+        """The iso view and the bounds for Jupyter; a shape without bounds
+        shows why there is no image."""
+        png, box, why = self._preview()
+        title = f"Shape {html.escape(repr(self.name))} ({html.escape(self.kind)})"
+        if box is None:
+            line = f"{title}: {html.escape(why)}"
+        else:
+            (x0, y0, z0), (x1, y1, z1) = box
+            line = (
+                f"{title}: bounds x {_num(x0)} .. {_num(x1)}, y {_num(y0)} .. {_num(y1)}, "
+                f"z {_num(z0)} .. {_num(z1)} mm (size {_num(x1 - x0)} x {_num(y1 - y0)} x {_num(z1 - z0)})"
+            )
+            if why is not None:
+                line += f"; {html.escape(why)}"
+        img = ""
+        if png is not None:
+            b64 = base64.b64encode(png).decode("ascii")
+            img = (
+                f'<img src="data:image/png;base64,{b64}" width="{_PREVIEW_SIZE}" '
+                f'height="{_PREVIEW_SIZE}" alt="{html.escape(self.name)}"/><br/>'
+            )
+        return f'<div class="microfrep-shape">{img}<span style="font-family: monospace">{line}</span></div>'
+
+
+_PREVIEW_SIZE = 256
+
+
+def _num(v) -> str:
+    """A number as the CLI's reports print it: 7 significant digits."""
+    if v is None:
+        return "undefined"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int):
+        return str(v)
+    v = float(v)
+    if math.isnan(v):
+        return "undefined"
+    return f"{v:.7g}"
+
+
+def _pm(d, unit: str = "") -> str:
+    """``{"value", "error"}`` as ``value ± error unit``."""
+    v, e = d.get("value"), d.get("error")
+    if v is None:
+        return "undefined"
+    out = _num(v)
+    if e is not None and not (isinstance(e, float) and math.isnan(e)):
+        out += f" ± {float(e):.2e}"
+    return f"{out} {unit}".rstrip()
+
+
+class AnalysisReport(dict):
+    """What :meth:`Shape.analyze` returns: the dict of ``microfrep analyze
+    --json``, shown in Jupyter as a table with one row per figure
+    (:meth:`figures`) and the report's notes."""
+
+    def figures(self) -> list:
+        """``(figure, value, note)`` rows, in the order of the CLI's text
+        report: volumes, fractions and area; connectivity and thickness
+        when measured; then each attribute."""
+        rows = []
+        within = f"inside region {self['region']}" if self.get("region") else "the bounds"
+        rows.append(("Volume", _pm(self["volume"], "mm³"), f"of the solid, {within}"))
+        rows.append(("Region volume", _pm(self["region_volume"], "mm³"), within))
+        rows.append(("Volume fraction", _pm(self["volume_fraction"]), "solid / region"))
+        rows.append(("Porosity", _pm(self["porosity"]), "1 - volume fraction"))
+        rows.append(("Surface area", _pm(self["area"], "mm²"), ""))
+        rows.append(("Specific surface", _pm(self["specific_surface"], "1/mm"), "area / volume"))
+        c = self.get("connectivity")
+        if c:
+            others = sum(c["solid_volumes"][1:])
+            rows.append(
+                ("Solid components", _num(c["solid_components"]), f"26-connected; volume outside the largest {_num(others)} mm³")
+            )
+            rows.append(("Pore components", _num(c["pore_components"]), "6-connected"))
+            rows.append(
+                ("Open pore fraction", _num(c["open_pore_fraction"]), "of the pore volume, open to the outside")
+            )
+            rows.append(("Closed pores", _num(c["closed_pores"]), f"volume {_num(c['closed_pore_volume'])} mm³"))
+            p = c["percolates"]
+            rows.append(("Percolation", ", ".join(f"{a} {_num(bool(p[a]))}" for a in "xyz"), "a pore component touches both faces of the box"))
+            rows.append(("Euler characteristic", _num(c["euler_solid"]), f"of the solid; {_num(c['euler_surface'])} of its surface"))
+        t = self.get("thickness")
+        if t:
+            for key, name in (("solid", "Thickness"), ("pore", "Pore size")):
+                ph = t.get(key)
+                if ph == "skipped" or ph is None:
+                    continue
+                if ph == "empty":
+                    rows.append((name, "none", "empty phase"))
+                elif ph.get("unbounded"):
+                    rows.append((name, "unbounded", "the phase fills the grid"))
+                else:
+                    rows.append(
+                        (
+                            name,
+                            f"mean {_num(ph['mean'])} mm",
+                            f"median {_num(ph['median'])}, p10 {_num(ph['p10'])}, p90 {_num(ph['p90'])}, "
+                            f"max {_num(ph['max'])} (local thickness, voxel {_num(t['voxel'])})",
+                        )
+                    )
+        for a in self.get("attributes") or []:
+            rows.append(
+                (
+                    f"Attribute {a['name']}",
+                    f"mean {_num(a['mean'])}",
+                    f"min {_num(a['min'])}, max {_num(a['max'])}, integral {_pm(a['integral'])}",
+                )
+            )
+        return rows
+
+    def _repr_html_(self) -> str:
+        e = html.escape
+        nx, ny, nz = self["dims"]
+        (x0, y0, z0), (x1, y1, z1) = self["bounds"]
+        vx = self["voxel"]
+        caption = (
+            f"analysis of {e(str(self.get('model')))}: {nx} x {ny} x {nz} voxels of "
+            f"{' x '.join(_num(v) for v in vx)} mm in x {_num(x0)} .. {_num(x1)}, "
+            f"y {_num(y0)} .. {_num(y1)}, z {_num(z0)} .. {_num(z1)}"
+        )
+        body = "".join(
+            f"<tr><th style=\"text-align: left\">{e(f)}</th><td style=\"text-align: right\">{e(v)}</td>"
+            f"<td style=\"text-align: left\">{e(n)}</td></tr>"
+            for f, v, n in self.figures()
+        )
+        notes = "".join(f"<li>{e(str(n))}</li>" for n in self.get("notes") or [])
+        return (
+            f'<table class="microfrep-analysis"><caption>{caption}</caption>'
+            f"<thead><tr><th>figure</th><th>value</th><th>note</th></tr></thead>"
+            f"<tbody>{body}</tbody></table>" + (f"<ul>{notes}</ul>" if notes else "")
+        )
 
 
 def _points(points) -> np.ndarray:

@@ -54,7 +54,7 @@ import uuid
 from typing import Optional
 
 from . import _core
-from ._model import Shape, _box
+from ._model import AnalysisReport, Shape, _box
 
 __all__ = ["slice_to", "analyze"]
 
@@ -327,4 +327,4 @@ def analyze(
         region.name if region is not None else None,
         seconds,
     )
-    return json.loads(s)
+    return AnalysisReport(json.loads(s))
