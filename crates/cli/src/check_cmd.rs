@@ -1,27 +1,51 @@
 //! `microfrep check MODEL.hf`: parse and lower a HyperFun file, list its
 //! objects and parameters, report every error and warning with
-//! `file:line:col`, the source line and a caret. Exits non-zero on an error.
+//! `file:line:col`, the source line and a caret. Takes the model options
+//! that `mesh` takes (`--object`, `-a`, `--field`, `--bounds`): fields are
+//! built (so a broken mesh or scan is found here) and parameters are
+//! checked against the object. Exits non-zero on an error.
 
+use crate::common::{parse_box, with_stages, ModelArgs, RunArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 
 #[derive(Args)]
 pub struct CheckArgs {
-    /// HyperFun model file (.hf).
-    model: String,
-    /// Object to check as the evaluated one (default `my_model`, else the first).
+    #[command(flatten)]
+    model: ModelArgs,
+    /// No progress bars and no notes.
     #[arg(long)]
-    object: Option<String>,
+    quiet: bool,
 }
 
 pub fn run(a: CheckArgs) -> Result<()> {
     microfrep::install_library();
-    let src = std::fs::read_to_string(&a.model).with_context(|| format!("reading {}", a.model))?;
-    let r = match microfrep::hyperfun::check::check(&src, &a.model, a.object.as_deref()) {
+    let m = &a.model;
+    let run = RunArgs {
+        quiet: a.quiet,
+        json: false,
+        threads: None,
+    };
+    if let Some(b) = &m.bounds {
+        parse_box("--bounds", b)?;
+    }
+    let src = std::fs::read_to_string(&m.model).with_context(|| format!("reading {}", m.model))?;
+    let opts = m.load_options();
+    let bound = with_stages(&run, |p| microfrep::load::bind_fields(&opts, p));
+    let bound = bound?;
+    for n in &bound.notes {
+        run.note(n);
+    }
+    let lo = microfrep::hyperfun::LoadOptions {
+        object: m.object.clone(),
+        params: m.params.clone(),
+        fields: bound.fields,
+    };
+    let r = match microfrep::hyperfun::check::check_with(&src, &m.model, &lo) {
         Ok(r) => r,
         Err(d) => {
             eprint!("{}", d.render(&src));
-            bail!("{}: {} error(s)", a.model, d.errors().count());
+            bail!("{}: {} error(s)", m.model, d.errors().count());
         }
     };
     for o in &r.objects {
@@ -42,11 +66,11 @@ pub fn run(a: CheckArgs) -> Result<()> {
         }
     }
     eprint!("{}", r.diagnostics.render(&src));
-    for m in &r.unlocated {
-        eprintln!("{}: error: {m}", a.model);
+    for msg in &r.unlocated {
+        eprintln!("{}: error: {msg}", m.model);
     }
     if r.errors() > 0 {
-        bail!("{}: {} error(s)", a.model, r.errors());
+        bail!("{}: {} error(s)", m.model, r.errors());
     }
     println!("ok ({} warning(s))", r.diagnostics.items.len());
     Ok(())

@@ -14,8 +14,11 @@ use std::path::Path;
 #[derive(Args, Clone, Debug)]
 pub struct ModelArgs {
     /// Model: a HyperFun file (.hf), a mesh (.stl .obj .ply .3mf), a scan
-    /// (.nrrd .nii .nii.gz .tif .raw, or a folder of slices; add :iso=V), or
-    /// a built-in example (see `microfrep examples`).
+    /// (.nrrd .nii .nii.gz .tif .raw, or a folder of slices;
+    /// FILE:iso=V[,smooth=MM,spacing=X,Y,Z,step=N,series=UID,frame=F]; its
+    /// coordinates are in the file's frame, LPS for DICOM and RAS for
+    /// NIfTI, or frame=lps|ras|voxel), or a built-in example (see
+    /// `microfrep examples`).
     pub model: String,
     /// HyperFun object to evaluate (default `my_model`, else the first).
     #[arg(long)]
@@ -116,23 +119,37 @@ pub fn parse_field(s: &str) -> Result<(String, String), String> {
     Ok((n.to_string(), src.trim().to_string()))
 }
 
-/// Loads the model (with a progress bar for long builds), protects its
-/// files from being overwritten, and prints its notes.
-pub fn load_model(m: &ModelArgs, run: &RunArgs) -> Result<Loaded> {
-    let opts = LoadOptions {
-        object: m.object.clone(),
-        params: m.params.clone(),
-        fields: m.fields.clone(),
-        memory_limit: None,
-    };
+impl ModelArgs {
+    /// What the facade's loader takes from these options.
+    pub fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            object: self.object.clone(),
+            params: self.params.clone(),
+            fields: self.fields.clone(),
+            memory_limit: None,
+        }
+    }
+}
+
+/// Runs `f` with a progress callback `(stage, done, total)` drawn as a
+/// bar (hidden with `--quiet` or off a terminal), cleared when it ends.
+pub fn with_stages<T>(run: &RunArgs, f: impl FnOnce(load::Progress) -> T) -> T {
     let bar = run.bar("");
     let progress = |stage: &str, done: u64, total: u64| {
         bar.set_message(stage.to_string());
         bar.set_length(total);
         bar.set_position(done);
     };
-    let loaded = load::load_with_progress(&m.model, &opts, &progress);
+    let r = f(&progress);
     bar.finish_and_clear();
+    r
+}
+
+/// Loads the model (with a progress bar for long builds), protects its
+/// files from being overwritten, and prints its notes.
+pub fn load_model(m: &ModelArgs, run: &RunArgs) -> Result<Loaded> {
+    let opts = m.load_options();
+    let loaded = with_stages(run, |p| load::load_with_progress(&m.model, &opts, p));
     let loaded = loaded.map_err(|e| match e {
         LoadError::HyperFun(d) => {
             // The whole report with source lines and carets.

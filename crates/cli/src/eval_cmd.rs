@@ -11,7 +11,7 @@ pub struct EvalArgs {
     #[command(flatten)]
     model: ModelArgs,
     /// Coordinates x y z [x y z ...]; read from stdin (one point per line) if absent.
-    #[arg(allow_hyphen_values = true, num_args = 0..)]
+    #[arg(allow_negative_numbers = true, num_args = 0..)]
     coords: Vec<String>,
     /// Also print the gradient (df/dx df/dy df/dz).
     #[arg(long)]

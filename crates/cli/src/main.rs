@@ -11,6 +11,7 @@ mod fill_cmd;
 mod materials_cmd;
 mod mesh_cmd;
 mod render_cmd;
+mod scan_info_cmd;
 mod serve_cmd;
 mod slice_cmd;
 mod voxels_cmd;
@@ -49,6 +50,8 @@ enum Cmd {
     Mesh(mesh_cmd::MeshArgs),
     /// Slice into layer images (png), contours (svg) or a Common Layer Interface file (cli).
     Slice(slice_cmd::SliceArgs),
+    /// What a scan holds: size, spacing, frame, values, histogram, suggested iso values.
+    ScanInfo(scan_info_cmd::ScanInfoArgs),
     /// Ray-cast image, cut-away view or section of a model.
     Render(render_cmd::RenderArgs),
     /// Occupancy or field values on a voxel grid (.raw + .json, .vtk, .nrrd).
@@ -73,6 +76,15 @@ fn list_examples(only: Option<&str>) -> anyhow::Result<()> {
             e.name, lo, hi, e.description
         );
     }
+    if only.is_none() {
+        println!(
+            "\nYour own parts: a .hf model, a mesh (.stl .obj .ply .3mf) or a scan \
+             (FILE:iso=V). A scan's coordinates are millimetres in the frame its file \
+             names: LPS for DICOM (x to the patient's left, y posterior, z superior), \
+             RAS for NIfTI (x right, y anterior); FILE:iso=V,frame=lps|ras|voxel chooses \
+             one, and `microfrep scan-info FILE` shows it with suggested iso values."
+        );
+    }
     Ok(())
 }
 
@@ -94,6 +106,10 @@ fn main() {
         std::process::exit(130);
     });
     let cli = Cli::parse();
+    // For the README test: the command line parses, nothing runs.
+    if std::env::var_os("MICROFREP_PARSE_ONLY").is_some() {
+        std::process::exit(0);
+    }
     let res = match cli.cmd {
         Cmd::Examples { name } => list_examples(name.as_deref()),
         Cmd::Eval(a) => eval_cmd::run(a),
@@ -104,6 +120,7 @@ fn main() {
         Cmd::Mesh(a) => mesh_cmd::run(a),
         Cmd::Slice(a) => slice_cmd::run(a),
         Cmd::Render(a) => render_cmd::run(a),
+        Cmd::ScanInfo(a) => scan_info_cmd::run(a),
         Cmd::Voxels(a) => voxels_cmd::run(a),
         Cmd::Analyze(a) => analyze_cmd::run(a),
         Cmd::Serve(a) => serve_cmd::run(a),

@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use microfrep::graded::dither::Method;
 use microfrep::graded::stack::{
-    preset, write_material_stack, MaterialStack, Palette, ShapeSource, StackGrid,
+    find_preset, write_material_stack, MaterialStack, Palette, ShapeSource, StackGrid,
 };
 use std::path::PathBuf;
 
@@ -28,7 +28,8 @@ pub struct MaterialsArgs {
     /// Voxel pitch X[,Y] (or from --preset).
     #[arg(long)]
     pixel: Option<String>,
-    /// A printer grid, e.g. mj-600x300-27um.
+    /// A printer grid: mj-600x300-27um, mj-600x300-14um, mj-600x600-27um,
+    /// vat-50um or dlp-25um (an unknown name lists them with their pitches).
     #[arg(long)]
     preset: Option<String>,
     /// error-diffusion (default), stochastic or ordered.
@@ -62,7 +63,7 @@ pub fn run(a: MaterialsArgs) -> Result<()> {
     let b = frame(&m, &a.model, &a.run)?;
     let grid = match (&a.preset, a.layer, &a.pixel) {
         (Some(p), None, None) => {
-            let p = preset(p).with_context(|| format!("unknown preset '{p}'"))?;
+            let p = find_preset(p).map_err(|e| anyhow::anyhow!("--preset: {e}"))?;
             StackGrid::from_preset(b.min, b.max, p)?
         }
         (None, Some(layer), Some(px)) => {

@@ -18,9 +18,10 @@ pub struct VoxelsArgs {
     /// Voxel side.
     #[arg(long)]
     voxel: f64,
-    /// Write f32 values instead of occupancy bytes.
+    /// Write the field's f32 values instead of occupancy bytes (`--field`
+    /// binds a data field, as in every verb).
     #[arg(long)]
-    field: bool,
+    values: bool,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -32,7 +33,7 @@ pub fn run(a: VoxelsArgs) -> Result<()> {
     let b = frame(&m, &a.model, &a.run)?;
     probe_terminates(&m, b.corners())?;
     let grid = VoxelGrid::new(b.min, b.max, a.voxel)?;
-    write_voxels(&m.shape, &grid, a.field, &a.output)?;
+    write_voxels(&m.shape, &grid, a.values, &a.output)?;
     let sidecar = a.output.with_extension("json");
     let raw = a.output.extension().is_some_and(|e| e == "raw");
     let outputs: Vec<&Path> = if raw {

@@ -776,7 +776,7 @@ impl StackFormat for AttributeStack {
             let _ = writeln!(
                 s,
                 "    {{\"file\": \"{}\", \"z\": {}}}{sep}",
-                self.layer_name(k),
+                self.layer_name(grid.first + k),
                 grid.z(k)
             );
         }

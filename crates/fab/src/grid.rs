@@ -27,6 +27,13 @@ pub struct SliceGrid {
     pub ny: usize,
     /// Number of layers (along z), at least 1.
     pub layers: usize,
+    /// Number of layer 0 in the whole stack it was taken from
+    /// ([`SliceGrid::range`]); 0 for a whole stack. Layer `k` is the
+    /// stack's layer `first + k`: its height and its file name.
+    pub first: usize,
+    /// The height of the middle of layer 0 when it was asked for exactly
+    /// ([`SliceGrid::at_height`]); otherwise it is `min[2] + layer / 2`.
+    pub mid: Option<f64>,
 }
 
 fn count(len: f64, step: f64, what: &str, max: usize) -> Result<usize> {
@@ -73,7 +80,10 @@ impl SliceGrid {
             (2, "height", layer, "layer"),
         ] {
             let side = max[a] - min[a];
-            if step > side {
+            // The box's sides come from subtractions: a layer equal to the
+            // height as written (0.2 for 10..10.2) is accepted.
+            if step > side * (1.0 + 1e-9) {
+                let side = microfrep_io::text::sig(side, 6);
                 return Err(FabError::Invalid(format!(
                     "the {what} size {step} exceeds the box's {name} {side}: its samples would \
                      lie outside the box; use a {what} of at most {side} or a larger box"
@@ -97,12 +107,59 @@ impl SliceGrid {
             nx,
             ny,
             layers,
+            first: 0,
+            mid: None,
         })
+    }
+
+    /// Layers `from..=to` of this stack (numbered from 0, as in a whole
+    /// run), at the heights and with the file names they have there.
+    pub fn range(&self, from: usize, to: usize) -> Result<SliceGrid> {
+        let last = self.first + self.layers - 1;
+        if from > to || from < self.first || to > last {
+            return Err(FabError::Invalid(format!(
+                "layers {from}..{to}: the stack has layers {}..{last} (0-based, both ends included)",
+                self.first
+            )));
+        }
+        Ok(SliceGrid {
+            layers: to - from + 1,
+            first: from,
+            ..self.clone()
+        })
+    }
+
+    /// One layer of thickness `layer` whose middle is at height `z`, over
+    /// the x and y of the box `min..max` (which must hold `z`).
+    pub fn at_height(
+        min: [f64; 3],
+        max: [f64; 3],
+        z: f64,
+        layer: f64,
+        pixel: f64,
+    ) -> Result<SliceGrid> {
+        if !(z.is_finite() && z >= min[2] && z <= max[2]) {
+            return Err(FabError::Invalid(format!(
+                "height z = {z} is outside the box's z range {} .. {}",
+                min[2], max[2]
+            )));
+        }
+        let mut g = SliceGrid::new(min, max, layer.min(max[2] - min[2]), pixel)?;
+        g.layer = layer;
+        g.layers = 1;
+        g.first = 0;
+        g.min[2] = z - 0.5 * layer;
+        // Sampled at `z` itself, not at a rounded bottom plus half a layer.
+        g.mid = Some(z);
+        Ok(g)
     }
 
     /// Height of the middle of layer `k`.
     pub fn z(&self, k: usize) -> f64 {
-        self.min[2] + (k as f64 + 0.5) * self.layer
+        match self.mid {
+            Some(m) => m + (self.first + k) as f64 * self.layer,
+            None => self.min[2] + ((self.first + k) as f64 + 0.5) * self.layer,
+        }
     }
 
     /// x of the centre of pixel column `i`.

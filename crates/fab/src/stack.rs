@@ -115,7 +115,7 @@ impl StackFormat for Format {
     }
     fn header(&self, grid: &SliceGrid) -> Vec<u8> {
         match self {
-            Format::Cli => cli_format::header(grid.min, top(grid), grid.layers).into_bytes(),
+            Format::Cli => cli_format::header(bottom(grid), top(grid), grid.layers).into_bytes(),
             _ => Vec::new(),
         }
     }
@@ -131,17 +131,27 @@ impl StackFormat for Format {
     fn footer(&self, grid: &SliceGrid) -> Vec<u8> {
         match self {
             Format::Cli => cli_format::FOOTER.as_bytes().to_vec(),
-            f => manifest(grid, *f, &|k| f.layer_name(k)).into_bytes(),
+            f => manifest(grid, *f, &|k| f.layer_name(grid.first + k)).into_bytes(),
         }
     }
 }
 
 /// The far corner of the sliced box.
+/// The lower corner of the layers written (above the stack's own corner
+/// for a range of its layers).
+fn bottom(grid: &SliceGrid) -> [f64; 3] {
+    [
+        grid.min[0],
+        grid.min[1],
+        grid.min[2] + grid.first as f64 * grid.layer,
+    ]
+}
+
 fn top(grid: &SliceGrid) -> [f64; 3] {
     [
         grid.min[0] + grid.nx as f64 * grid.pixel,
         grid.min[1] + grid.ny as f64 * grid.pixel,
-        grid.min[2] + grid.layers as f64 * grid.layer,
+        grid.min[2] + (grid.first + grid.layers) as f64 * grid.layer,
     ]
 }
 
@@ -158,7 +168,7 @@ pub fn write_stack(
     progress: &(dyn Fn() + Sync),
 ) -> Result<()> {
     use microfrep_io::{AtomicDir, AtomicFile};
-    crate::grid::check_precision(shape, grid.min, top(grid))?;
+    crate::grid::check_precision(shape, bottom(grid), top(grid))?;
     enum Target {
         File(AtomicFile),
         Dir(AtomicDir),
@@ -177,14 +187,14 @@ pub fn write_stack(
         let end = (start + batch).min(grid.layers);
         let payloads: Vec<Result<(Vec<u8>, u64)>> = (start..end)
             .into_par_iter()
-            .map(|k| format.layer(shape, grid, k, &out.join(format.layer_name(k))))
+            .map(|k| format.layer(shape, grid, k, &out.join(format.layer_name(grid.first + k))))
             .collect();
         for (k, p) in (start..end).zip(payloads) {
             let (bytes, n) = p?;
             solid += n;
             match &mut target {
                 Target::File(f) => f.write_all(&bytes).map_err(io_at(out))?,
-                Target::Dir(d) => d.write(&format.layer_name(k), &bytes)?,
+                Target::Dir(d) => d.write(&format.layer_name(grid.first + k), &bytes)?,
             }
             progress();
         }
@@ -296,6 +306,7 @@ fn manifest(grid: &SliceGrid, format: Format, file_name: &dyn Fn(usize) -> Strin
         grid.min[0], grid.min[1], grid.min[2]
     );
     let _ = writeln!(s, "  \"image_size\": [{}, {}],", grid.nx, grid.ny);
+    let _ = writeln!(s, "  \"first_layer\": {},", grid.first);
     let _ = writeln!(
         s,
         "  \"notes\": \"origin is the outer corner of the bottom-left pixel at the bottom of \

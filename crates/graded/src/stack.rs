@@ -30,9 +30,7 @@
 //!
 //! Pitch presets ([`PRESETS`]) name common material-jetting and vat grids.
 
-use crate::dither::{
-    dither, DitherReport, LayerSource, Layout, Method, DEFAULT_MEMORY_LIMIT, OUTSIDE,
-};
+use crate::dither::{dither, DitherReport, LayerSource, Layout, Method, OUTSIDE};
 use crate::error::{io_at, Error, Result};
 use microfrep_core::{BatchEval, Interval, IntervalEval, Shape, Simplify, Tape};
 use rayon::prelude::*;
@@ -192,7 +190,7 @@ impl Preset {
 }
 
 /// Common grids (nominal values; check the machine's own settings).
-pub const PRESETS: [Preset; 4] = [
+pub const PRESETS: [Preset; 5] = [
     Preset {
         name: "mj-600x300-27um",
         dpi: [600.0, 300.0],
@@ -218,11 +216,32 @@ pub const PRESETS: [Preset; 4] = [
         layer: 0.05,
         note: "grey-scale vat photopolymerisation (LCD / DLP): 50 um pixels and layers",
     },
+    Preset {
+        name: "dlp-25um",
+        dpi: [1016.0, 1016.0],
+        layer: 0.025,
+        note: "high-resolution DLP vat photopolymerisation (micro-lattices, scaffolds): \
+               25 um pixels and layers",
+    },
 ];
 
 /// The preset called `name`.
 pub fn preset(name: &str) -> Option<&'static Preset> {
     PRESETS.iter().find(|p| p.name == name)
+}
+
+/// The preset called `name`, or an error listing every preset.
+pub fn find_preset(name: &str) -> std::result::Result<&'static Preset, String> {
+    preset(name).ok_or_else(|| {
+        let list: Vec<String> = PRESETS
+            .iter()
+            .map(|p| format!("  {:<16} {}", p.name, p.note))
+            .collect();
+        format!(
+            "unknown preset '{name}'; the presets are:\n{}",
+            list.join("\n")
+        )
+    })
 }
 
 const MAX_SIDE: usize = 1 << 17;
@@ -361,14 +380,16 @@ pub struct MaterialStack {
 }
 
 impl MaterialStack {
-    /// Error diffusion, transparent background, default memory limit.
+    /// Error diffusion, transparent background, and the memory this
+    /// process may use ([`microfrep_io::limits::default_memory_budget`]:
+    /// free memory, the cgroup's limit and `ulimit -v`).
     pub fn new(palette: Palette) -> MaterialStack {
         MaterialStack {
             palette,
             method: Method::ErrorDiffusion,
             background: Background::Transparent,
             preset: None,
-            memory_limit: DEFAULT_MEMORY_LIMIT,
+            memory_limit: microfrep_io::limits::default_memory_budget(),
         }
     }
 }
@@ -452,6 +473,7 @@ fn flush(
     pending.clear();
     for r in encoded {
         let (path, b) = r?;
+        let _g = microfrep_io::atomic::begin_write(&path).map_err(Error::File)?;
         fs::write(&path, &b).map_err(io_at(&path))?;
         *bytes += b.len() as u64;
     }
@@ -522,6 +544,7 @@ pub fn write_material_stack(
         flush(dir, &mut pending, &encode_layer, &mut bytes)?;
         let mfile = dir.join("manifest.json");
         let text = material_manifest(grid, opts, &report);
+        let _g = microfrep_io::atomic::begin_write(&mfile).map_err(Error::File)?;
         fs::write(&mfile, text).map_err(io_at(&mfile))?;
         Ok(StackReport {
             layers: grid.layers,
@@ -614,11 +637,12 @@ pub fn write_grey_stack(
     let plane = nx * ny;
     // One layer of values, mask and pixels, plus the pending batch.
     let bytes_needed = plane as u128 * (4 + 1 + 1) + (batch_size() * plane) as u128;
-    if bytes_needed > DEFAULT_MEMORY_LIMIT as u128 {
+    let limit = microfrep_io::limits::default_memory_budget() as u128;
+    if bytes_needed > limit {
         return Err(Error::TooLarge {
             what: format!("grey layers of {nx} x {ny} pixels"),
             bytes: bytes_needed,
-            limit: DEFAULT_MEMORY_LIMIT as u128,
+            limit,
         });
     }
     let encode_layer = |path: &Path, px: &[u8]| encode(path, nx, ny, png::ColorType::Grayscale, px);
@@ -666,6 +690,7 @@ pub fn write_grey_stack(
         let mfile = dir.join("manifest.json");
         let mut s = serde_json::to_string_pretty(&serde_json::Value::Object(m)).expect("json");
         s.push('\n');
+        let _g = microfrep_io::atomic::begin_write(&mfile).map_err(Error::File)?;
         fs::write(&mfile, s).map_err(io_at(&mfile))?;
         Ok(StackReport {
             layers: grid.layers,

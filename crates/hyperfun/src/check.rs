@@ -71,22 +71,52 @@ impl CheckReport {
 
 /// Parses and lowers every object of `src`; `Err` holds parse errors.
 pub fn check(src: &str, file: &str, object: Option<&str>) -> Result<CheckReport, Diagnostics> {
-    let (program, warnings) = crate::parse_with(src, file, crate::Options::default())?;
+    let opts = crate::LoadOptions {
+        object: object.map(str::to_string),
+        ..Default::default()
+    };
+    check_with(src, file, &opts)
+}
+
+/// [`check`] with what a load would be given: the object, its parameters
+/// (checked against the object's `a[N]`) and the data fields the model
+/// calls by name.
+pub fn check_with(
+    src: &str,
+    file: &str,
+    opts: &crate::LoadOptions,
+) -> Result<CheckReport, Diagnostics> {
+    let mut registry = Registry::standard();
+    for (name, f) in &opts.fields {
+        registry.register_field(name, f.clone());
+    }
+    let table = |name: &str| crate::standard_signature(&registry, name);
+    let (program, warnings) =
+        crate::parse_with_table(src, file, crate::Options::default(), &table)?;
     let program = Arc::new(program);
     let mut items = warnings.items;
-    let registry = Registry::standard();
     let mut unlocated = Vec::new();
     let mut objects = Vec::new();
+    let object = opts.object.as_deref();
+    let mut report = |items: &mut Vec<Diagnostic>, name: &str, e: lower::LowerError| {
+        if e.pos.line == 0 {
+            unlocated.push(format!("object '{name}': {}", e.message));
+        } else {
+            items.push(diag(Severity::Error, e.pos, e.message));
+        }
+    };
     for (i, o) in program.objects.iter().enumerate() {
         objects.push(format!(
             "{}(x[{}], a[{}], s[{}])",
             o.name, o.x_size, o.a_size, o.s_size
         ));
-        if let Err(e) = lower::lower(program.clone(), i, &registry, &[]) {
-            if e.pos.line == 0 {
-                unlocated.push(format!("object '{}': {}", o.name, e.message));
-            } else {
-                items.push(diag(Severity::Error, e.pos, e.message));
+        match lower::lower(program.clone(), i, &registry, &[]) {
+            Err(e) => report(&mut items, &o.name, e),
+            Ok(m) => {
+                for e in m.certain_errors {
+                    let message = format!("{} (whenever this runs, for every point)", e.message);
+                    report(&mut items, &o.name, lower::LowerError { message, ..e });
+                }
             }
         }
     }
@@ -97,9 +127,14 @@ pub fn check(src: &str, file: &str, object: Option<&str>) -> Result<CheckReport,
         Some(i) => {
             let o = &program.objects[i];
             evaluated = Some((o.name.clone(), o.a_size));
-            if let Ok(m) = lower::lower(program.clone(), i, &registry, &[]) {
-                per_point = !m.lowered;
-                per_point_reason = m.per_point;
+            match lower::load_program_with(program.clone(), object, &opts.params, &registry) {
+                Ok(m) => {
+                    per_point = !m.lowered;
+                    per_point_reason = m.per_point;
+                }
+                // Parameter errors (the object's own errors are above).
+                Err(e) if e.pos.line == 0 => report(&mut items, &o.name, e),
+                Err(_) => {}
             }
         }
         None => unlocated.push(match object {

@@ -48,6 +48,39 @@ static LIVE: Mutex<Vec<(u64, PathBuf, bool)>> = Mutex::new(Vec::new());
 /// This run's inputs: canonical path, and (device, inode) where known.
 static INPUTS: Mutex<Vec<(PathBuf, Option<(u64, u64)>)>> = Mutex::new(Vec::new());
 static SEQ: AtomicU64 = AtomicU64::new(1);
+/// Set by [`cleanup_all`]: no new file is written into a temporary.
+static SHUTTING_DOWN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// Files being written into temporary directories right now.
+static IN_FLIGHT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Held while one file is written into a temporary directory, so that
+/// [`cleanup_all`] waits for it instead of racing it (a worker thread
+/// that writes a layer after its directory was removed would leave a
+/// half-made directory behind).
+pub struct WriteGuard(());
+
+impl Drop for WriteGuard {
+    fn drop(&mut self) {
+        IN_FLIGHT.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// A [`WriteGuard`] for one write, or an error once the process is
+/// cleaning up to exit (the write must not happen).
+pub fn begin_write(path: &Path) -> Result<WriteGuard> {
+    IN_FLIGHT.fetch_add(1, Ordering::SeqCst);
+    let g = WriteGuard(());
+    if SHUTTING_DOWN.load(Ordering::SeqCst) {
+        return Err(IoError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "interrupted: the outputs are being removed",
+            ),
+        });
+    }
+    Ok(g)
+}
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
@@ -105,6 +138,13 @@ fn file_id(path: &Path) -> Option<(u64, u64)> {
 /// Removes every temporary still being written (for a signal handler: the
 /// process is about to exit). Safe to call at any time.
 pub fn cleanup_all() {
+    // No new writes, then wait (briefly) for those under way, so no worker
+    // thread recreates a file in a directory being removed.
+    SHUTTING_DOWN.store(true, Ordering::SeqCst);
+    let t = std::time::Instant::now();
+    while IN_FLIGHT.load(Ordering::SeqCst) > 0 && t.elapsed() < std::time::Duration::from_secs(5) {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
     let live = std::mem::take(&mut *lock(&LIVE));
     for (_, p, dir) in live {
         let _ = if dir {
@@ -551,6 +591,7 @@ impl AtomicDir {
 
     /// Writes one file of the directory.
     pub fn write(&self, name: &str, bytes: &[u8]) -> Result<()> {
+        let _g = begin_write(&self.target.join(name))?;
         fs::write(self.temp.join(name), bytes).map_err(|e| IoError::Io {
             path: self.target.join(name),
             source: e,

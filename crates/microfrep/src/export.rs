@@ -80,19 +80,20 @@ pub fn slice_3mf(
         })
         .collect();
     let n = layers.len();
+    // The bottom of the first layer written (a range of a stack starts
+    // above the stack's bottom).
+    let z0 = grid.min[2] + grid.first as f64 * grid.layer;
     let max = [
         grid.min[0] + grid.nx as f64 * grid.pixel,
         grid.min[1] + grid.ny as f64 * grid.pixel,
-        grid.min[2] + grid.layers as f64 * grid.layer,
+        z0 + grid.layers as f64 * grid.layer,
     ];
+    let min = [grid.min[0], grid.min[1], z0];
     let mut m = Model::new(Unit::Millimeter);
-    let low = m.add_mesh(
-        Some("part"),
-        mesh3(shape, Bounds::new(grid.min, max), preview)?,
-    );
+    let low = m.add_mesh(Some("part"), mesh3(shape, Bounds::new(min, max), preview)?);
     let sid = m.next_id();
     m.slice_stacks
-        .push(SliceStack::uniform(sid, grid.min[2], grid.layer, layers));
+        .push(SliceStack::uniform(sid, z0, grid.layer, layers));
     if let Some(o) = m.objects.iter_mut().find(|o| o.id == low) {
         o.slice_stack = Some(sid);
         o.mesh_resolution = MeshResolution::Low;

@@ -50,13 +50,29 @@ impl Source {
     pub fn parse(s: &str) -> Result<Source, LoadError> {
         if let Some((p, opts)) = s.rsplit_once(':') {
             if opts.contains('=') && !p.is_empty() {
-                let mut options = BTreeMap::new();
+                let mut options: BTreeMap<String, String> = BTreeMap::new();
+                // A token without `=` continues the previous value, so a
+                // vector reads as `spacing=0.5,0.5,1` (or `0.5x0.5x1`).
+                let mut last: Option<String> = None;
                 for kv in opts.split(',').filter(|t| !t.trim().is_empty()) {
-                    let (k, v) = kv.split_once('=').ok_or_else(|| LoadError::Options {
-                        source_name: s.to_string(),
-                        message: format!("'{kv}' is not key=value"),
-                    })?;
-                    options.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
+                    match (kv.split_once('='), &last) {
+                        (Some((k, v)), _) => {
+                            let k = k.trim().to_ascii_lowercase();
+                            options.insert(k.clone(), v.trim().to_string());
+                            last = Some(k);
+                        }
+                        (None, Some(k)) => {
+                            let v = options.get_mut(k).expect("the last key is present");
+                            v.push(',');
+                            v.push_str(kv.trim());
+                        }
+                        (None, None) => {
+                            return Err(LoadError::Options {
+                                source_name: s.to_string(),
+                                message: format!("'{kv}' is not key=value"),
+                            })
+                        }
+                    }
                 }
                 return Ok(Source {
                     path: p.to_string(),
@@ -342,25 +358,10 @@ fn load_hyperfun(path: &Path, opts: &LoadOptions, progress: Progress) -> Result<
         path: path.to_path_buf(),
         source: e,
     })?;
+    let bound = bind_fields(opts, progress)?;
     let mut inputs = vec![path.to_path_buf()];
-    let mut notes = Vec::new();
-    let mut fields = Vec::new();
-    for (name, spec) in &opts.fields {
-        let src = Source::parse(spec)?;
-        let p = Path::new(&src.path);
-        let kind = kind_of(p).ok_or_else(|| {
-            src.bad("--field takes a mesh, a scan or a .csv of measured data".into())
-        })?;
-        if kind == SourceKind::HyperFun {
-            return Err(
-                src.bad("--field takes a mesh, a scan or a .csv, not a HyperFun file".into())
-            );
-        }
-        let f = field(&src, kind, limit(opts), progress)?;
-        notes.extend(f.notes.into_iter().map(|n| format!("{name}: {n}")));
-        inputs.push(p.to_path_buf());
-        fields.push((name.clone(), f.field));
-    }
+    inputs.extend(bound.inputs);
+    let (fields, notes) = (bound.fields, bound.notes);
     let file = path.display().to_string();
     let lo = microfrep_hyperfun::LoadOptions {
         object: opts.object.clone(),
@@ -376,6 +377,50 @@ fn load_hyperfun(path: &Path, opts: &LoadOptions, progress: Progress) -> Result<
         notes,
         inputs,
     })
+}
+
+/// The data fields of [`LoadOptions::fields`], built.
+pub struct BoundFields {
+    /// `(NAME, field)`, as a HyperFun model calls them.
+    pub fields: Vec<(String, Arc<dyn Field>)>,
+    /// Notes for the user, each prefixed with its field's name.
+    pub notes: Vec<String>,
+    /// The files they were read from.
+    pub inputs: Vec<PathBuf>,
+}
+
+/// Builds every field of `opts.fields` (meshes, scans, CSV data), as a
+/// HyperFun load does before lowering the model.
+pub fn bind_fields(opts: &LoadOptions, progress: Progress) -> Result<BoundFields, LoadError> {
+    let mut out = BoundFields {
+        fields: Vec::new(),
+        notes: Vec::new(),
+        inputs: Vec::new(),
+    };
+    for (i, (name, spec)) in opts.fields.iter().enumerate() {
+        let src = Source::parse(spec)?;
+        if let Some((_, first)) = opts.fields[..i].iter().find(|(n, _)| n == name) {
+            return Err(src.bad(format!(
+                "the field name '{name}' is bound twice (to {first} and to {spec}); give each \
+                 --field its own name"
+            )));
+        }
+        let p = Path::new(&src.path);
+        let kind = kind_of(p).ok_or_else(|| {
+            src.bad("--field takes a mesh, a scan or a .csv of measured data".into())
+        })?;
+        if kind == SourceKind::HyperFun {
+            return Err(
+                src.bad("--field takes a mesh, a scan or a .csv, not a HyperFun file".into())
+            );
+        }
+        let f = field(&src, kind, limit(opts), progress)?;
+        out.notes
+            .extend(f.notes.into_iter().map(|n| format!("{name}: {n}")));
+        out.inputs.push(p.to_path_buf());
+        out.fields.push((name.clone(), f.field));
+    }
+    Ok(out)
 }
 
 /// A data field built from a source, with where its solid lies.
@@ -516,15 +561,64 @@ fn scan_field(
     memory_limit: u64,
     progress: Progress,
 ) -> Result<BuiltField, LoadError> {
-    use microfrep_scan::{ReadOptions, ScanField, ScanOptions, Volume};
-    src.check_keys(&["iso", "smooth", "spacing", "step", "series"])?;
+    use microfrep_scan::{ScanField, ScanOptions};
+    src.check_keys(&["iso", "smooth", "spacing", "step", "series", "frame"])?;
     let iso = src.number("iso")?.ok_or_else(|| {
         src.bad(
             "a scan needs its iso value: the intensity at and above which a voxel is inside, \
-             e.g. :iso=300 for bone in CT (Hounsfield units) or :iso=0.5 for occupancy"
+             e.g. :iso=300 for bone in CT (Hounsfield units) or :iso=0.5 for occupancy; \
+             `microfrep scan-info FILE` suggests one"
                 .into(),
         )
     })?;
+    let (vol, notes) = read_volume(src, path, memory_limit, progress)?;
+    let mut so = ScanOptions::new(iso);
+    so.smooth = src.number("smooth")?.unwrap_or(0.0);
+    so.memory_limit = memory_limit;
+    let f =
+        ScanField::build_with_progress(&vol, &so, &|d, t| progress("distance transform", d, t))?;
+    let b = f.bounds();
+    Ok(BuiltField {
+        bounds: Bounds::new(b[0], b[1]),
+        field: f.into_field(),
+        notes,
+    })
+}
+
+/// Reads a scan `PATH[:spacing=X,Y,Z,step=N,series=UID,frame=F]` as a
+/// volume (no iso value needed), with a note on its coordinate frame: what
+/// `scan-info` shows before a threshold is chosen.
+pub fn read_scan(
+    spec: &str,
+    memory_limit: Option<u64>,
+    progress: Progress,
+) -> Result<(microfrep_scan::Volume, Vec<String>), LoadError> {
+    let src = Source::parse(spec)?;
+    let path = Path::new(&src.path);
+    if !path.exists() {
+        return Err(LoadError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
+        });
+    }
+    if kind_of(path) != Some(SourceKind::Scan) {
+        return Err(src.bad(
+            "not a scan (.nrrd .nhdr .nii .nii.gz .hdr .tif .raw, or a folder of DICOM or TIFF slices)"
+                .into(),
+        ));
+    }
+    src.check_keys(&["spacing", "step", "series", "frame"])?;
+    let limit = memory_limit.unwrap_or_else(microfrep_io::limits::default_memory_budget);
+    read_volume(&src, path, limit, progress)
+}
+
+fn read_volume(
+    src: &Source,
+    path: &Path,
+    memory_limit: u64,
+    progress: Progress,
+) -> Result<(microfrep_scan::Volume, Vec<String>), LoadError> {
+    use microfrep_scan::{Frame, ReadOptions, Volume};
     let mut ro = ReadOptions {
         memory_limit,
         ..ReadOptions::default()
@@ -552,18 +646,36 @@ fn scan_field(
         ro.step = s as usize;
     }
     ro.series = src.options.get("series").cloned();
+    if let Some(f) = src.options.get("frame") {
+        ro.frame = Frame::parse(f)
+            .ok_or_else(|| src.bad(format!("frame={f}: use file, lps, ras or voxel")))?;
+    }
     let vol = Volume::open_with_progress(path, &ro, &|d, t| progress("reading scan", d, t))?;
-    let mut so = ScanOptions::new(iso);
-    so.smooth = src.number("smooth")?.unwrap_or(0.0);
-    so.memory_limit = memory_limit;
-    let f =
-        ScanField::build_with_progress(&vol, &so, &|d, t| progress("distance transform", d, t))?;
-    let b = f.bounds();
-    Ok(BuiltField {
-        bounds: Bounds::new(b[0], b[1]),
-        field: f.into_field(),
-        notes: Vec::new(),
-    })
+    let notes = vec![frame_note(&vol.frame, ro.frame)];
+    Ok((vol, notes))
+}
+
+/// What a scan's coordinates mean, for the summary.
+fn frame_note(frame: &str, asked: microfrep_scan::Frame) -> String {
+    let what = match frame {
+        "LPS" => {
+            "LPS (x to the patient's left, y posterior, z superior: DICOM's frame)".to_string()
+        }
+        "RAS" => {
+            "RAS (x to the patient's right, y anterior, z superior: NIfTI's frame)".to_string()
+        }
+        "voxel" => {
+            "the voxel grid in mm (sample 0 at the origin, the file's axis order)".to_string()
+        }
+        "unknown" => "the file's axes in mm (it names no patient frame)".to_string(),
+        other => format!("the file's frame `{other}` (not a patient frame)"),
+    };
+    let how = if asked == microfrep_scan::Frame::File {
+        "the file's own; FILE:frame=lps, ras or voxel chooses another"
+    } else {
+        "chosen with :frame="
+    };
+    format!("coordinates in {what}, {how}")
 }
 
 /// The expression of a bound field at `(x, y, z)`, for Rust models.
@@ -585,7 +697,14 @@ mod tests {
         assert_eq!(s.path, "dir/a:b.stl");
         assert!(s.options.is_empty());
         assert!(Source::parse("x.stl:weld").unwrap().options.is_empty());
-        assert!(Source::parse("x.stl:weld=1,sign").is_err());
+        assert!(Source::parse("x.stl:sign,weld=1").is_err());
+        // Vectors: commas continue the value, as the docs write them.
+        let s = Source::parse("ct/:iso=300,spacing=0.5,0.5,1.25,step=2").unwrap();
+        assert_eq!(s.options["spacing"], "0.5,0.5,1.25");
+        assert_eq!(s.options["step"], "2");
+        // A stray word after a number is no longer a number.
+        let s = Source::parse("x.stl:weld=1,sign").unwrap();
+        assert!(s.number("weld").is_err());
     }
 
     fn temp(name: &str) -> std::path::PathBuf {

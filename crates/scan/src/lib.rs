@@ -22,7 +22,9 @@
 //!      writes (occupancy bytes or f32 field values).
 //!
 //!    Axes are flipped and permuted to run along +x, +y, +z of the file's
-//!    frame; oblique volumes are refused. Every reader predicts its memory
+//!    frame (LPS for DICOM, RAS for NIfTI, NRRD's `space`), or of the
+//!    frame [`ReadOptions::frame`] asks for ([`Frame`]: LPS, RAS, or the
+//!    voxel grid in mm); oblique volumes are refused. Every reader predicts its memory
 //!    before allocating and refuses over [`ReadOptions::memory_limit`]
 //!    with a crop or downsampling step that would fit; [`ReadOptions::crop`]
 //!    and [`ReadOptions::step`] apply while the slices stream in.
@@ -92,11 +94,14 @@ pub mod nrrd;
 pub mod raw;
 mod sdf;
 mod smooth;
+pub mod stats;
 pub mod tif;
 pub mod volume;
 
 pub use error::{Result, ScanError};
 pub use field::{plan_bytes, surface_bytes, IntensityField, ScanField, ScanOptions};
+pub use stats::Histogram;
 pub use volume::{
-    no_progress, Format, Progress, ReadOptions, SampleType, Samples, Volume, DEFAULT_MEMORY_LIMIT,
+    no_progress, Format, Frame, Progress, ReadOptions, SampleType, Samples, Volume,
+    DEFAULT_MEMORY_LIMIT,
 };

@@ -124,9 +124,10 @@ pub struct Volume {
     pub slope: f64,
     /// Value = `slope * raw + intercept`.
     pub intercept: f64,
-    /// Coordinate frame of the file as it names it (`LPS` for DICOM,
-    /// `RAS` for NIfTI, NRRD's `space`, or `unknown`); coordinates are
-    /// kept as the file gives them, not converted between frames.
+    /// Coordinate frame of the coordinates: the file's own as it names it
+    /// (`LPS` for DICOM, `RAS` for NIfTI, NRRD's `space`, or `unknown`)
+    /// unless [`ReadOptions::frame`] chose another (`LPS`, `RAS` or
+    /// `voxel`).
     pub frame: String,
     /// The file or folder it came from.
     pub source: PathBuf,
@@ -152,6 +153,99 @@ pub struct ReadOptions {
     pub origin: Option<[f64; 3]>,
     /// DICOM: the SeriesInstanceUID to read when a folder holds several.
     pub series: Option<String>,
+    /// The coordinate frame of the volume's coordinates (default: the
+    /// file's own).
+    pub frame: Frame,
+}
+
+/// The coordinate frame a scan's coordinates are given in.
+///
+/// Patient frames name where each axis points: `LPS` (DICOM, ITK, and the
+/// files 3D Slicer saves) has +x towards the patient's left, +y posterior,
+/// +z superior; `RAS` (NIfTI, and 3D Slicer's scene) has +x right, +y
+/// anterior, +z superior. The two differ by the sign of x and y.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Frame {
+    /// The frame the file names (LPS for DICOM, RAS for NIfTI, NRRD's
+    /// `space`; TIFF stacks and raw files name none).
+    #[default]
+    File,
+    /// Left, posterior, superior.
+    Lps,
+    /// Right, anterior, superior.
+    Ras,
+    /// The file's voxel grid in millimetres, ignoring its position and
+    /// orientation: sample `(i, j, k)` as stored at `(i sx, j sy, k sz)`
+    /// (plus [`ReadOptions::origin`] when given).
+    Voxel,
+}
+
+impl Frame {
+    /// Parses `file`, `lps`, `ras` or `voxel` (any case).
+    pub fn parse(s: &str) -> Option<Frame> {
+        match s.to_ascii_lowercase().as_str() {
+            "file" => Some(Frame::File),
+            "lps" => Some(Frame::Lps),
+            "ras" => Some(Frame::Ras),
+            "voxel" => Some(Frame::Voxel),
+            _ => None,
+        }
+    }
+
+    /// Axis signs of a named patient frame relative to RAS.
+    fn signs(name: &str) -> Option<[f64; 3]> {
+        let n = name.to_ascii_uppercase();
+        let b = n.as_bytes();
+        if b.len() != 3 {
+            return None;
+        }
+        let s = |c: u8, pos: u8, neg: u8| match c {
+            _ if c == pos => Some(1.0),
+            _ if c == neg => Some(-1.0),
+            _ => None,
+        };
+        Some([
+            s(b[0], b'R', b'L')?,
+            s(b[1], b'A', b'P')?,
+            s(b[2], b'S', b'I')?,
+        ])
+    }
+}
+
+/// Moves a file's geometry into the frame asked for, returning the frame's
+/// name. `file_frame` is what the file names.
+fn into_frame(
+    g: &mut Geometry,
+    file_frame: &str,
+    want: Frame,
+    opts: &ReadOptions,
+    path: &Path,
+) -> Result<String> {
+    let target = match want {
+        Frame::File => return Ok(file_frame.to_string()),
+        Frame::Voxel => {
+            let s: [f64; 3] = std::array::from_fn(|a| norm(g.dirs[a]));
+            *g = Geometry::diagonal(s, opts.origin.unwrap_or([0.0; 3]));
+            return Ok("voxel".into());
+        }
+        Frame::Lps => "LPS",
+        Frame::Ras => "RAS",
+    };
+    let (Some(from), Some(to)) = (Frame::signs(file_frame), Frame::signs(target)) else {
+        return Err(ScanError::Invalid(format!(
+            "{}: the file names no patient frame ({file_frame}), so it cannot be put in {target}; \
+             use frame=file or frame=voxel",
+            path.display()
+        )));
+    };
+    let m: [f64; 3] = std::array::from_fn(|w| from[w] * to[w]);
+    for w in 0..3 {
+        g.origin[w] *= m[w];
+        for d in g.dirs.iter_mut() {
+            d[w] *= m[w];
+        }
+    }
+    Ok(target.into())
 }
 
 impl Default for ReadOptions {
@@ -163,6 +257,7 @@ impl Default for ReadOptions {
             spacing: None,
             origin: None,
             series: None,
+            frame: Frame::File,
         }
     }
 }
@@ -676,7 +771,8 @@ impl Assembler {
                 scale.1
             )));
         }
-        let geometry = geometry.with_overrides(opts, path)?;
+        let mut geometry = geometry.with_overrides(opts, path)?;
+        let frame = into_frame(&mut geometry, frame, opts.frame, opts, path)?;
         let (perm, flip) = geometry.axes(path)?;
         let (lo, hi) = match opts.crop {
             None => ([0; 3], file_dims),
@@ -746,7 +842,7 @@ impl Assembler {
             flip,
             scale: compact_scale,
             compact,
-            frame: frame.to_string(),
+            frame,
         })
     }
 

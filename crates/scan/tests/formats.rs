@@ -982,3 +982,108 @@ fn nifti_header_and_image_pair() {
     );
     assert_eq!(v.value(3, 2, 1), 3.5);
 }
+
+/// The same phantom (the ball at `C`, given in the patient frame LPS) as a
+/// DICOM series and as a NIfTI file whose sform is in RAS: read in either
+/// frame, the landmark lands at the same world coordinates from both.
+#[test]
+fn scan_frames_put_a_landmark_at_the_same_place_from_dicom_and_nifti() {
+    use microfrep_scan::Frame;
+    use ndarray::Array3;
+    let d = tmp("frames");
+    let dir = d.join("ct");
+    let g = ct_series(&dir, "1.2.3.9", None, |_| 1.0);
+    let [nx, ny, nz] = g.dims;
+    // NIfTI as converters write it from DICOM: RAS = (-x, -y, z) of LPS.
+    let lps = |i: usize, j: usize, k: usize| g.at([i, j, k]);
+    let a = Array3::from_shape_fn((nx, ny, nz), |(i, j, k)| hu(lps(i, j, k)) as i16);
+    let mut h = nifti_header();
+    h.sform_code = 1;
+    h.qform_code = 0;
+    h.srow_x = [-0.5, 0.0, 0.0, -g.origin[0] as f32];
+    h.srow_y = [0.0, -0.6, 0.0, -g.origin[1] as f32];
+    h.srow_z = [0.0, 0.0, 0.7, g.origin[2] as f32];
+    h.pixdim = [1.0, 0.5, 0.6, 0.7, 1.0, 1.0, 1.0, 1.0];
+    let nii = d.join("ct.nii");
+    nifti::writer::WriterOptions::new(&nii)
+        .reference_header(&h)
+        .write_nifti(&a)
+        .unwrap();
+    let ras_c = [-C[0], -C[1], C[2]];
+    let voxel_c: [f64; 3] = std::array::from_fn(|a| C[a] - g.origin[a]);
+    let cases = [
+        (Frame::Lps, "LPS", C),
+        (Frame::Ras, "RAS", ras_c),
+        (Frame::Voxel, "voxel", voxel_c),
+    ];
+    for (frame, name, c) in cases {
+        for (src, file_frame) in [(&dir, "LPS"), (&nii, "RAS")] {
+            let opts = ReadOptions {
+                frame,
+                ..ReadOptions::default()
+            };
+            let v = Volume::open(src, &opts).unwrap();
+            assert_eq!(v.frame, name, "{}", src.display());
+            let f = ScanField::build(&v, &ScanOptions::new(0.0)).unwrap();
+            // The centre is deep inside; the surface is R away along each
+            // axis, both ways (which places the centre within 0.1 mm).
+            let at = |p: [f64; 3]| f.eval(p);
+            assert!(at(c) > 2.0, "{name} {}: {}", src.display(), at(c));
+            for ax in 0..3 {
+                for s in [-1.0, 1.0] {
+                    let mut p = c;
+                    p[ax] += s * R;
+                    assert!(
+                        at(p).abs() < 0.1,
+                        "{name} {} {p:?}: {}",
+                        src.display(),
+                        at(p)
+                    );
+                }
+            }
+            // Read in its own frame, the file gives its own coordinates.
+            let own = Volume::open(src, &ReadOptions::default()).unwrap();
+            assert_eq!(own.frame, file_frame);
+        }
+    }
+    // In their own frames the two files disagree: that is what frames fix.
+    let own_nii = Volume::open(&nii, &ReadOptions::default()).unwrap();
+    let f = ScanField::build(&own_nii, &ScanOptions::new(0.0)).unwrap();
+    let off = [C[0] + R, C[1], C[2]];
+    let ras_off = [ras_c[0] + R, ras_c[1], ras_c[2]];
+    assert!(f.eval(ras_off).abs() < 0.1 && f.eval(off).abs() > 1.0);
+    // A file that names no patient frame cannot be moved into one.
+    let raw = d.join("plain.nrrd");
+    let hdr = format!(
+        "NRRD0004\ntype: short\ndimension: 3\nsizes: {nx} {ny} {nz}\nspacings: 0.5 0.6 0.7\n\
+         endian: little\nencoding: raw\n\n"
+    );
+    let mut bytes = hdr.into_bytes();
+    bytes.extend(i16_bytes(&g.values(hu), false));
+    std::fs::write(&raw, bytes).unwrap();
+    let v = Volume::open(&raw, &ReadOptions::default()).unwrap();
+    assert_eq!(v.frame, "unknown");
+    let opts = ReadOptions {
+        frame: Frame::Ras,
+        ..ReadOptions::default()
+    };
+    let e = Volume::open(&raw, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("names no patient frame") && e.contains("frame=voxel"),
+        "{e}"
+    );
+    assert_eq!(
+        Volume::open(
+            &raw,
+            &ReadOptions {
+                frame: Frame::Voxel,
+                ..ReadOptions::default()
+            }
+        )
+        .unwrap()
+        .origin,
+        [0.0; 3]
+    );
+    assert_eq!(Frame::parse("RaS"), Some(Frame::Ras));
+    assert_eq!(Frame::parse("world"), None);
+}

@@ -264,6 +264,9 @@ pub struct Exec<'p> {
     nodes_at_start: u64,
     /// Object calls already run, by callee, guard and argument values.
     calls: HashMap<CallKey, Called>,
+    /// Run-time errors raised whenever their statement runs, whatever the
+    /// point (a constant index out of range): bugs `check` reports.
+    pub certain: Vec<(String, Pos)>,
 }
 
 /// One part of a call's identity: a node, or a constant by its bits
@@ -332,6 +335,7 @@ impl<'p> Exec<'p> {
             limit_hit: false,
             nodes_at_start: Expr::nodes_created(),
             calls: HashMap::new(),
+            certain: Vec::new(),
         }
     }
 
@@ -360,6 +364,9 @@ impl<'p> Exec<'p> {
         let hit = self.guard.and(&cond);
         if hit.as_const() == Some(0.0) || self.dead() {
             return;
+        }
+        if cond.as_const().is_some_and(|v| v != 0.0) && !self.certain.iter().any(|c| c.1 == pos) {
+            self.certain.push((message.to_string(), pos));
         }
         let code = self.table.code(RuntimeError {
             message: message.to_string(),

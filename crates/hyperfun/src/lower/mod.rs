@@ -77,6 +77,11 @@ pub struct Model {
     pub lowered: bool,
     /// Why the model runs per point, when `lowered` is false.
     pub per_point: Option<PerPoint>,
+    /// Run-time errors that the statement at their position raises every
+    /// time it runs, for any point (a constant array index out of range,
+    /// a variable read before any assignment): certain bugs, which
+    /// [`crate::check::check`] reports as errors.
+    pub certain_errors: Vec<LowerError>,
     /// The per-point interpreter of this object (what the fallback runs,
     /// and [`Model::interpreted`] for a lowered model).
     interp: Arc<fallback::Interp>,
@@ -217,9 +222,18 @@ pub fn lower(
         params: names.into_iter().zip(pvals.iter().copied()).collect(),
         lowered: true,
         per_point: None,
+        certain_errors: Vec::new(),
         interp,
     };
-    match ex.run(obj, inputs) {
+    let run = ex.run(obj, inputs);
+    let base = Model {
+        certain_errors: std::mem::take(&mut ex.certain)
+            .into_iter()
+            .map(|(message, pos)| LowerError { message, pos })
+            .collect(),
+        ..base
+    };
+    match run {
         Ok(out) => {
             let error = prune::error_code(&ex.sites);
             let mut s = out.s;
