@@ -21,6 +21,11 @@ const BIN: &str = env!("CARGO_BIN_EXE_microfrep");
 const TORIBALL: f64 = 1.6383;
 /// The transfinite example's volume (analysis at 2048 voxels: 2.6919 ± 0.0019).
 const TRANSFINITE: f64 = 2.692;
+/// A graded model with two material shares, for `materials`.
+const PARK_FIG4: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../examples/park_fig4_wiffle_gradient.hf"
+);
 
 fn example(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -123,6 +128,32 @@ fn assert_clear_error(o: &Out, needle: &str) {
 fn json(o: &Out) -> serde_json::Value {
     assert_eq!(o.code, 0, "{}", o.stderr);
     serde_json::from_str(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", o.stdout))
+}
+
+/// `materials` sizes its buffers to what the process may use (`ulimit -v`
+/// here), not to a fixed 8 GiB: a clear error, and no directory left.
+#[test]
+fn materials_under_a_small_address_space_fails_clearly() {
+    let d = dir("ulimit-materials");
+    let out = d.join("m").display().to_string();
+    let o = run_with(
+        &[
+            "materials",
+            PARK_FIG4,
+            "--palette",
+            "a=#FF0000,b=#0000FF",
+            "--layer",
+            "0.01",
+            "--pixel",
+            "0.0005",
+            "-o",
+            &out,
+        ],
+        Some(1_500_000),
+        Duration::from_secs(30),
+    );
+    assert_clear_error(&o, "dithering 7942 x 7942 voxels");
+    assert!(entries(&d).is_empty(), "{:?}", entries(&d));
 }
 
 #[test]
@@ -585,6 +616,23 @@ fn interrupts_leave_no_output_and_no_temporary() {
         (
             "voxels",
             vec!["voxels", "toriball", "--voxel", "0.004", "-o", "OUT/v.raw"],
+            true,
+        ),
+        // Layers written by worker threads while the cleanup runs.
+        (
+            "materials",
+            vec![
+                "materials",
+                PARK_FIG4,
+                "--palette",
+                "a=#FF0000,b=#0000FF",
+                "--layer",
+                "0.004",
+                "--pixel",
+                "0.005",
+                "-o",
+                "OUT/mat",
+            ],
             true,
         ),
         (
