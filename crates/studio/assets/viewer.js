@@ -1,6 +1,7 @@
 // microfrep studio: a small WebGL viewer for the studio's meshes.
 // Orbit (left drag), pan (right drag or shift + left drag), zoom (wheel),
-// reset (double click). A section plane and a cut-away octant are clipped
+// reset (double click). The view refits when an edit changes the model's
+// box materially (camera.js). A section plane and a cut-away octant are clipped
 // in the fragment shader; the mesh is closed, so where the clip opens it
 // the inside faces show, drawn in a flat cap colour: a capped cut. The
 // value map of the section plane (a server-rendered image) can be laid
@@ -8,6 +9,7 @@
 "use strict";
 
 (function () {
+  const Cam = window.StudioCamera;
   // --- 4x4 matrices, column-major as WebGL takes them ---
   function perspective(fovy, aspect, near, far) {
     const f = 1 / Math.tan(fovy / 2), nf = 1 / (near - far);
@@ -164,6 +166,10 @@ void main() {
       this.mesh = null;
       this.bounds = [[-1, -1, -1], [1, 1, 1]];
       this.yaw = -0.785; this.pitch = 0.6; this.dist = 4; this.target = [0, 0, 0];
+      // The box the view was last fitted to, how often it was, and why.
+      this.fitted = null;
+      this.refits = 0;
+      this.lastRefit = null;
       this.section = { axis: -1, value: 0, flip: false };
       this.cutaway = false;
       this.attr = -1;
@@ -227,39 +233,52 @@ void main() {
       c.addEventListener("dblclick", () => this.resetView());
     }
 
-    axes() {
-      const cp = Math.cos(this.pitch), sp = Math.sin(this.pitch);
-      const fwd = [-cp * Math.cos(this.yaw), -cp * Math.sin(this.yaw), -sp];
-      const right = norm(cross(fwd, [0, 0, 1]));
-      const up = cross(right, fwd);
-      return { fwd, right, up };
+    axes() { return Cam.axes(this.yaw, this.pitch); }
+
+    eye() { return Cam.eye(this.camera()); }
+
+    camera() {
+      return { yaw: this.yaw, pitch: this.pitch, dist: this.dist, target: this.target.slice(), fov: this.fov() };
     }
 
-    eye() {
-      const { fwd } = this.axes();
-      return [0, 1, 2].map((a) => this.target[a] - fwd[a] * this.dist);
+    aspect() {
+      const c = this.canvas;
+      return c.clientWidth > 0 && c.clientHeight > 0 ? c.clientWidth / c.clientHeight : 1;
     }
 
+    // The model's new box. With `reset` the view is fitted afresh (iso);
+    // otherwise it is refitted, keeping the orbit angles, when the box
+    // differs materially from the one the view was fitted to (see
+    // camera.js: more than 25 % in size or position, or off screen).
     setBounds(b, reset) {
       this.bounds = b;
       if (reset) this.resetView();
+      else {
+        const why = Cam.refitReason(this.fitted, b, this.camera(), this.aspect());
+        if (why) this.refit(why);
+      }
+      this.dirty = true;
+    }
+
+    // Fits target and distance to the box, keeping yaw and pitch.
+    refit(why) {
+      const c = Cam.fit(this.bounds, this.yaw, this.pitch, this.fov());
+      this.target = c.target;
+      this.dist = c.dist;
+      this.fitted = this.bounds;
+      this.refits++;
+      this.lastRefit = why || "refit";
       this.dirty = true;
     }
 
     resetView(view) {
-      const b = this.bounds;
-      this.target = [0, 1, 2].map((a) => 0.5 * (b[0][a] + b[1][a]));
-      const r = 0.5 * Math.hypot(b[1][0] - b[0][0], b[1][1] - b[0][1], b[1][2] - b[0][2]);
-      // The solid rarely reaches the box's corners: frame a little tighter
-      // than the box's bounding sphere.
-      this.dist = r / Math.sin(0.5 * this.fov()) * 0.92;
       const v = view || "iso";
       const presets = { iso: [-0.785, 0.6], front: [-Math.PI / 2, 0], top: [-Math.PI / 2, 1.5499], side: [0, 0] };
       [this.yaw, this.pitch] = presets[v] || presets.iso;
-      this.dirty = true;
+      this.refit("reset");
     }
 
-    fov() { return 35 * Math.PI / 180; }
+    fov() { return Cam.FOV; }
 
     // A mesh blob (ArrayBuffer); keeps the view.
     setMesh(buf) {

@@ -16,25 +16,10 @@
 //! within one brick or layer. Every call into the other microfrep crates
 //! lives in [`engine`].
 //!
-//! Endpoints (JSON unless said; every `POST` needs the header
-//! `X-Studio: 1`):
-//!
-//! | endpoint | what |
-//! | --- | --- |
-//! | `GET /` | the page (`/studio.js`, `/viewer.js`, `/editor.js`, `/studio.css`) |
-//! | `POST /api/session` | a new session: `{session, file, source, files, levels}` |
-//! | `POST /api/edit` | `{session, source, file?, object?, params?, bounds?}`: a new generation; replies with the state once lowered (at most `wait_ms`, 1500) |
-//! | `GET /api/state?session&since&wait_ms` | the state, after waiting for a version above `since` |
-//! | `GET /api/wait?session&gen&wait_ms` | the state once generation `gen` finished all stages |
-//! | `GET /api/mesh?session&gen&level` | mesh buffers (see [`wire`]) |
-//! | `GET /api/section.png?session&gen&axis&value&w&h` | the value on a plane (PNG) |
-//! | `GET /api/render.png?session&gen&view&cutaway&w&h` | ray-cast image (PNG) |
-//! | `GET /api/export.stl?session&gen&resolution?` | binary STL |
-//! | `GET /api/export.hf?session&gen` | the model's source as a download |
-//! | `GET /api/slices.zip?session&gen&layer&pixel&format?` | slice stack as a zip |
-//! | `POST /api/slices` | `{session, gen, dir, layer, pixel, format?}`: stack into a folder under the working directory |
-//! | `POST /api/save` | `{path, source}`: writes a `.hf` under the working directory |
-//! | `GET /api/files`, `GET /api/file?path` | `.hf` files under the working directory, and one's text |
+//! Endpoints: every route is in [`ROUTES`] (which the router itself looks
+//! up) and documented in the crate's `API.md`, which the server serves at
+//! `GET /api`: parameters, limits, replies and errors. Every `POST` needs
+//! the header `X-Studio: 1`; mesh buffers are laid out as [`wire`] says.
 //!
 //! ```
 //! use microfrep_studio::{client, ServeOptions, Studio};
@@ -71,6 +56,7 @@ pub mod session;
 pub mod wire;
 
 pub use error::StudioError;
+pub use server::{Route, API_MD, ROUTES};
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::PathBuf;

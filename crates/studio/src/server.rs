@@ -29,8 +29,18 @@ const POLL: Duration = Duration::from_secs(20);
 
 const INDEX: &str = include_str!("../assets/index.html");
 const STUDIO_JS: &str = include_str!("../assets/studio.js");
-const VIEWER_JS: &str = include_str!("../assets/viewer.js");
+/// The viewer, with the camera's pure functions (`camera.js`) in front: one
+/// script, not two, as tiny_http 0.12 can leave a sixth connection the
+/// browser opens at once unserved while the others are kept alive (its
+/// thread pool counts a woken thread as still waiting).
+const VIEWER_JS: &str = concat!(
+    include_str!("../assets/camera.js"),
+    "\n",
+    include_str!("../assets/viewer.js")
+);
 const EDITOR_JS: &str = include_str!("../assets/editor.js");
+/// The HTTP API's reference, served at `GET /api`.
+pub const API_MD: &str = include_str!("../API.md");
 const CSS: &str = include_str!("../assets/studio.css");
 /// The model shown when none was named.
 pub const SAMPLE: &str = include_str!("../assets/sample.hf");
@@ -343,6 +353,67 @@ fn parse_bounds(v: &Value) -> Result<[[f64; 3]; 2], StudioError> {
     Ok(b)
 }
 
+/// What answers one endpoint.
+type Handler = fn(&mut Request, &Shared, &Query) -> Result<Reply, StudioError>;
+
+/// One endpoint of the server: its method and path, and what answers it.
+pub struct Route {
+    /// `GET` or `POST`.
+    pub method: &'static str,
+    /// The path, without a query.
+    pub path: &'static str,
+    handler: Handler,
+}
+
+impl std::fmt::Debug for Route {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {}", self.method, self.path)
+    }
+}
+
+const fn get(path: &'static str, handler: Handler) -> Route {
+    Route {
+        method: "GET",
+        path,
+        handler,
+    }
+}
+
+const fn post(path: &'static str, handler: Handler) -> Route {
+    Route {
+        method: "POST",
+        path,
+        handler,
+    }
+}
+
+/// Every endpoint the server answers, as the router looks them up; each is
+/// documented in `API.md` (served at `GET /api`), which a test checks.
+pub const ROUTES: &[Route] = &[
+    get("/", page),
+    get("/index.html", page),
+    get("/studio.js", studio_js),
+    get("/viewer.js", viewer_js),
+    get("/editor.js", editor_js),
+    get("/studio.css", css),
+    get("/favicon.ico", favicon),
+    get("/api", api_doc),
+    post("/api/session", new_session),
+    post("/api/edit", edit),
+    get("/api/state", state),
+    get("/api/wait", wait),
+    get("/api/mesh", mesh),
+    get("/api/section.png", section_png),
+    get("/api/render.png", render_png),
+    get("/api/export.stl", export_stl),
+    get("/api/export.hf", export_hf),
+    get("/api/slices.zip", slices_zip),
+    post("/api/slices", slices_dir),
+    post("/api/save", save),
+    get("/api/files", files),
+    get("/api/file", file),
+];
+
 fn route(rq: &mut Request, sh: &Shared) -> Result<Reply, StudioError> {
     if !host_ok(rq, sh) {
         return Ok(Reply::text("text/plain", "unknown host").status(421));
@@ -354,238 +425,274 @@ fn route(rq: &mut Request, sh: &Shared) -> Result<Reply, StudioError> {
     if method == Method::Post && !has_header(rq, "X-Studio", "1") {
         return Ok(Reply::json(json!({"error": "missing header X-Studio: 1"})).status(403));
     }
-    match (&method, path) {
-        (Method::Get, "/") | (Method::Get, "/index.html") => {
-            Ok(Reply::text("text/html; charset=utf-8", INDEX))
-        }
-        (Method::Get, "/studio.js") => Ok(Reply::text("text/javascript; charset=utf-8", STUDIO_JS)),
-        (Method::Get, "/viewer.js") => Ok(Reply::text("text/javascript; charset=utf-8", VIEWER_JS)),
-        (Method::Get, "/editor.js") => Ok(Reply::text("text/javascript; charset=utf-8", EDITOR_JS)),
-        (Method::Get, "/studio.css") => Ok(Reply::text("text/css; charset=utf-8", CSS)),
-        (Method::Get, "/favicon.ico") => Ok(Reply::bytes("image/x-icon", Vec::new()).status(204)),
-        (Method::Post, "/api/session") => {
-            let s = sh.sessions.create()?;
-            Ok(Reply::json(json!({
-                "session": s.id,
-                "file": sh.initial.0,
-                "source": sh.initial.1,
-                "files": paths::list_models(&sh.root, 4, 500),
-                "levels": sh.sessions.config().levels,
-            })))
-        }
-        (Method::Post, "/api/edit") => {
-            let received = Instant::now();
-            let v = body_json(rq)?;
-            let s = sh.sessions.get(str_field(&v, "session")?)?;
-            let source = str_field(&v, "source")?.to_string();
-            let file = v
-                .get("file")
-                .and_then(Value::as_str)
-                .filter(|f| !f.is_empty())
-                .unwrap_or("model.hf")
-                .to_string();
-            let object = v
-                .get("object")
-                .and_then(Value::as_str)
-                .filter(|o| !o.is_empty())
-                .map(str::to_string);
-            let params =
-                match v.get("params") {
-                    None | Some(Value::Null) => None,
-                    Some(Value::Array(a)) => Some(
-                        a.iter()
-                            .map(|x| match x {
-                                Value::Null => Ok(None),
-                                x => x.as_f64().filter(|x| x.is_finite()).map(Some).ok_or_else(
-                                    || {
-                                        StudioError::Request(
-                                            "params must be finite numbers or null".into(),
-                                        )
-                                    },
-                                ),
-                            })
-                            .collect::<Result<Vec<Option<f64>>, _>>()?,
-                    ),
-                    Some(_) => return Err(StudioError::Request("params must be an array".into())),
-                };
-            let bounds = match v.get("bounds") {
-                None | Some(Value::Null) => None,
-                Some(b) => Some(parse_bounds(b)?),
-            };
-            let gen = s.edit(Edit {
-                source,
-                file,
-                object,
-                params,
-                bounds,
-                received,
-            })?;
-            let wait = v
-                .get("wait_ms")
-                .and_then(Value::as_u64)
-                .unwrap_or(1500)
-                .min(5000);
-            Ok(Reply::json(
-                s.state_when_loaded(gen, Duration::from_millis(wait)),
-            ))
-        }
-        (Method::Get, "/api/state") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let since: u64 = q.num_or("since", 0)?;
-            let wait: u64 = q.num_or("wait_ms", POLL.as_millis() as u64)?;
-            Ok(Reply::json(
-                s.state_after(since, Duration::from_millis(wait).min(POLL)),
-            ))
-        }
-        (Method::Get, "/api/wait") => {
-            // Waits for a generation to finish all its stages (for scripts
-            // and tests).
-            let s = sh.sessions.get(q.req("session")?)?;
-            let gen: u64 = q.num("gen")?;
-            let wait: u64 = q.num_or("wait_ms", 60_000)?;
-            let done = s.wait_done(gen, Duration::from_millis(wait.min(600_000)));
-            let mut st = s.state_after(0, Duration::ZERO);
-            st["finished"] = json!(done);
-            Ok(Reply::json(st))
-        }
-        (Method::Get, "/api/mesh") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let gen: u64 = q.num("gen")?;
-            let level: usize = q.num("level")?;
-            match s.mesh_blob(gen, level) {
-                Some(m) => Ok(Reply {
-                    status: 200,
-                    kind: "application/octet-stream",
-                    body: Body::Mesh(m),
-                    headers: Vec::new(),
-                }),
-                None => Err(StudioError::Request(format!(
-                    "no mesh level {level} for generation {gen}"
-                ))),
-            }
-        }
-        (Method::Get, "/api/section.png") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let snap = s.snapshot(q.num("gen")?)?;
-            let axis: usize = q.num("axis")?;
-            if axis > 2 {
-                return Err(StudioError::Request("axis must be 0, 1 or 2".into()));
-            }
-            let value: f64 = q.num("value")?;
-            let (w, h): (usize, usize) = (q.num_or("w", 256)?, q.num_or("h", 256)?);
-            if w > 2048 || h > 2048 {
-                return Err(StudioError::Request(
-                    "section images are at most 2048 pixels a side".into(),
-                ));
-            }
-            Ok(Reply::bytes(
-                "image/png",
-                export::section(sh, &snap, axis, value, w, h)?,
-            ))
-        }
-        (Method::Get, "/api/render.png") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let snap = s.snapshot(q.num("gen")?)?;
-            let (w, h): (usize, usize) = (q.num_or("w", 640)?, q.num_or("h", 480)?);
-            if w > 2048 || h > 2048 {
-                return Err(StudioError::Request(
-                    "renders are at most 2048 pixels a side".into(),
-                ));
-            }
-            let view = q.get("view").unwrap_or("iso");
-            let cut = q.get("cutaway") == Some("1");
-            Ok(Reply::bytes(
-                "image/png",
-                export::render(sh, &snap, view, cut, w, h)?,
-            ))
-        }
-        (Method::Get, "/api/export.stl") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let snap = s.snapshot(q.num("gen")?)?;
-            let res: Option<usize> = match q.get("resolution") {
-                Some(_) => Some(q.num("resolution")?),
-                None => None,
-            };
-            let bytes = export::stl(sh, &snap, res)?;
-            Ok(Reply::bytes("model/stl", bytes).attachment(&stem_with(&snap.file, ".stl")))
-        }
-        (Method::Get, "/api/export.hf") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let snap = s.snapshot(q.num("gen")?)?;
-            Ok(Reply::text("text/plain; charset=utf-8", &snap.source)
-                .attachment(&stem_with(&snap.file, ".hf")))
-        }
-        (Method::Get, "/api/slices.zip") => {
-            let s = sh.sessions.get(q.req("session")?)?;
-            let snap = s.snapshot(q.num("gen")?)?;
-            let layer: f64 = q.num("layer")?;
-            let pixel: f64 = q.num("pixel")?;
-            let format = export::slice_format(q.get("format").unwrap_or("png"))?;
-            let bytes = export::slices_zip(sh, &snap, layer, pixel, format)?;
-            Ok(Reply::bytes("application/zip", bytes)
-                .attachment(&stem_with(&snap.file, "-slices.zip")))
-        }
-        (Method::Post, "/api/slices") => {
-            let v = body_json(rq)?;
-            let s = sh.sessions.get(str_field(&v, "session")?)?;
-            let gen = field(&v, "gen")?
-                .as_u64()
-                .ok_or_else(|| StudioError::Request("gen must be a number".into()))?;
-            let snap = s.snapshot(gen)?;
-            let format =
-                export::slice_format(v.get("format").and_then(Value::as_str).unwrap_or("png"))?;
-            let dir = str_field(&v, "dir")?;
-            let layers = export::slices_dir(
-                sh,
-                &snap,
-                f64_field(&v, "layer")?,
-                f64_field(&v, "pixel")?,
-                format,
-                dir,
-            )?;
-            Ok(Reply::json(json!({ "written": dir, "layers": layers })))
-        }
-        (Method::Post, "/api/save") => {
-            let v = body_json(rq)?;
-            let path = str_field(&v, "path")?;
-            let source = str_field(&v, "source")?;
-            if !path.to_ascii_lowercase().ends_with(".hf") {
-                return Err(StudioError::Path {
-                    path: path.into(),
-                    reason: "only .hf files can be saved".into(),
-                });
-            }
-            let c = paths::writable(&sh.root, path, false)?;
-            export::write_atomic(&c.full, source.as_bytes())?;
-            Ok(Reply::json(json!({ "saved": c.relative })))
-        }
-        (Method::Get, "/api/files") => Ok(Reply::json(json!({
-            "files": paths::list_models(&sh.root, 4, 500)
-        }))),
-        (Method::Get, "/api/file") => {
-            let path = q.req("path")?;
-            if !path.to_ascii_lowercase().ends_with(".hf") {
-                return Err(StudioError::Path {
-                    path: path.into(),
-                    reason: "only .hf files can be opened".into(),
-                });
-            }
-            let c = paths::existing(&sh.root, path)?;
-            let meta = std::fs::metadata(&c.full).map_err(io_at(&c.full))?;
-            if !meta.is_file() || meta.len() > MAX_BODY {
-                return Err(StudioError::Path {
-                    path: path.into(),
-                    reason: "not a file, or over 4 MiB".into(),
-                });
-            }
-            let src = std::fs::read_to_string(&c.full).map_err(io_at(&c.full))?;
-            Ok(Reply::text("text/plain; charset=utf-8", &src))
-        }
-        _ => Ok(
+    match ROUTES
+        .iter()
+        .find(|r| r.path == path && r.method == method.as_str())
+    {
+        Some(r) => (r.handler)(rq, sh, &q),
+        None => Ok(
             Reply::json(json!({"error": format!("no such endpoint: {} {path}", method)}))
                 .status(404),
         ),
     }
+}
+
+fn page(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::text("text/html; charset=utf-8", INDEX))
+}
+
+fn studio_js(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::text("text/javascript; charset=utf-8", STUDIO_JS))
+}
+
+fn viewer_js(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::text("text/javascript; charset=utf-8", VIEWER_JS))
+}
+
+fn editor_js(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::text("text/javascript; charset=utf-8", EDITOR_JS))
+}
+
+fn css(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::text("text/css; charset=utf-8", CSS))
+}
+
+fn favicon(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::bytes("image/x-icon", Vec::new()).status(204))
+}
+
+fn api_doc(_: &mut Request, _: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::text("text/markdown; charset=utf-8", API_MD))
+}
+
+fn new_session(_: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.create()?;
+    Ok(Reply::json(json!({
+        "session": s.id,
+        "file": sh.initial.0,
+        "source": sh.initial.1,
+        "files": paths::list_models(&sh.root, 4, 500),
+        "levels": sh.sessions.config().levels,
+    })))
+}
+
+fn edit(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    let received = Instant::now();
+    let v = body_json(rq)?;
+    let s = sh.sessions.get(str_field(&v, "session")?)?;
+    let source = str_field(&v, "source")?.to_string();
+    let file = v
+        .get("file")
+        .and_then(Value::as_str)
+        .filter(|f| !f.is_empty())
+        .unwrap_or("model.hf")
+        .to_string();
+    let object = v
+        .get("object")
+        .and_then(Value::as_str)
+        .filter(|o| !o.is_empty())
+        .map(str::to_string);
+    let params = match v.get("params") {
+        None | Some(Value::Null) => None,
+        Some(Value::Array(a)) => Some(
+            a.iter()
+                .map(|x| match x {
+                    Value::Null => Ok(None),
+                    x => x
+                        .as_f64()
+                        .filter(|x| x.is_finite())
+                        .map(Some)
+                        .ok_or_else(|| {
+                            StudioError::Request("params must be finite numbers or null".into())
+                        }),
+                })
+                .collect::<Result<Vec<Option<f64>>, _>>()?,
+        ),
+        Some(_) => return Err(StudioError::Request("params must be an array".into())),
+    };
+    let bounds = match v.get("bounds") {
+        None | Some(Value::Null) => None,
+        Some(b) => Some(parse_bounds(b)?),
+    };
+    let gen = s.edit(Edit {
+        source,
+        file,
+        object,
+        params,
+        bounds,
+        received,
+    })?;
+    let wait = v
+        .get("wait_ms")
+        .and_then(Value::as_u64)
+        .unwrap_or(1500)
+        .min(5000);
+    Ok(Reply::json(
+        s.state_when_loaded(gen, Duration::from_millis(wait)),
+    ))
+}
+
+fn state(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let since: u64 = q.num_or("since", 0)?;
+    let wait: u64 = q.num_or("wait_ms", POLL.as_millis() as u64)?;
+    Ok(Reply::json(
+        s.state_after(since, Duration::from_millis(wait).min(POLL)),
+    ))
+}
+
+/// Waits for a generation to finish all its stages (for scripts and tests).
+fn wait(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let gen: u64 = q.num("gen")?;
+    let wait: u64 = q.num_or("wait_ms", 60_000)?;
+    let done = s.wait_done(gen, Duration::from_millis(wait.min(600_000)));
+    let mut st = s.state_after(0, Duration::ZERO);
+    st["finished"] = json!(done);
+    Ok(Reply::json(st))
+}
+
+fn mesh(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let gen: u64 = q.num("gen")?;
+    let level: usize = q.num("level")?;
+    match s.mesh_blob(gen, level) {
+        Some(m) => Ok(Reply {
+            status: 200,
+            kind: "application/octet-stream",
+            body: Body::Mesh(m),
+            headers: Vec::new(),
+        }),
+        None => Err(StudioError::Request(format!(
+            "no mesh level {level} for generation {gen}"
+        ))),
+    }
+}
+
+fn section_png(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let snap = s.snapshot(q.num("gen")?)?;
+    let axis: usize = q.num("axis")?;
+    if axis > 2 {
+        return Err(StudioError::Request("axis must be 0, 1 or 2".into()));
+    }
+    let value: f64 = q.num("value")?;
+    let (w, h): (usize, usize) = (q.num_or("w", 256)?, q.num_or("h", 256)?);
+    if w > 2048 || h > 2048 {
+        return Err(StudioError::Request(
+            "section images are at most 2048 pixels a side".into(),
+        ));
+    }
+    Ok(Reply::bytes(
+        "image/png",
+        export::section(sh, &snap, axis, value, w, h)?,
+    ))
+}
+
+fn render_png(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let snap = s.snapshot(q.num("gen")?)?;
+    let (w, h): (usize, usize) = (q.num_or("w", 640)?, q.num_or("h", 480)?);
+    if w > 2048 || h > 2048 {
+        return Err(StudioError::Request(
+            "renders are at most 2048 pixels a side".into(),
+        ));
+    }
+    let view = q.get("view").unwrap_or("iso");
+    let cut = q.get("cutaway") == Some("1");
+    Ok(Reply::bytes(
+        "image/png",
+        export::render(sh, &snap, view, cut, w, h)?,
+    ))
+}
+
+fn export_stl(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let snap = s.snapshot(q.num("gen")?)?;
+    let res: Option<usize> = match q.get("resolution") {
+        Some(_) => Some(q.num("resolution")?),
+        None => None,
+    };
+    let bytes = export::stl(sh, &snap, res)?;
+    Ok(Reply::bytes("model/stl", bytes).attachment(&stem_with(&snap.file, ".stl")))
+}
+
+fn export_hf(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let snap = s.snapshot(q.num("gen")?)?;
+    Ok(Reply::text("text/plain; charset=utf-8", &snap.source)
+        .attachment(&stem_with(&snap.file, ".hf")))
+}
+
+fn slices_zip(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let s = sh.sessions.get(q.req("session")?)?;
+    let snap = s.snapshot(q.num("gen")?)?;
+    let layer: f64 = q.num("layer")?;
+    let pixel: f64 = q.num("pixel")?;
+    let format = export::slice_format(q.get("format").unwrap_or("png"))?;
+    let bytes = export::slices_zip(sh, &snap, layer, pixel, format)?;
+    Ok(Reply::bytes("application/zip", bytes).attachment(&stem_with(&snap.file, "-slices.zip")))
+}
+
+fn slices_dir(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    let v = body_json(rq)?;
+    let s = sh.sessions.get(str_field(&v, "session")?)?;
+    let gen = field(&v, "gen")?
+        .as_u64()
+        .ok_or_else(|| StudioError::Request("gen must be a number".into()))?;
+    let snap = s.snapshot(gen)?;
+    let format = export::slice_format(v.get("format").and_then(Value::as_str).unwrap_or("png"))?;
+    let dir = str_field(&v, "dir")?;
+    let layers = export::slices_dir(
+        sh,
+        &snap,
+        f64_field(&v, "layer")?,
+        f64_field(&v, "pixel")?,
+        format,
+        dir,
+    )?;
+    Ok(Reply::json(json!({ "written": dir, "layers": layers })))
+}
+
+fn save(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    let v = body_json(rq)?;
+    let path = str_field(&v, "path")?;
+    let source = str_field(&v, "source")?;
+    if !path.to_ascii_lowercase().ends_with(".hf") {
+        return Err(StudioError::Path {
+            path: path.into(),
+            reason: "only .hf files can be saved".into(),
+        });
+    }
+    let c = paths::writable(&sh.root, path, false)?;
+    export::write_atomic(&c.full, source.as_bytes())?;
+    Ok(Reply::json(json!({ "saved": c.relative })))
+}
+
+fn files(_: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    Ok(Reply::json(json!({
+        "files": paths::list_models(&sh.root, 4, 500)
+    })))
+}
+
+fn file(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+    let path = q.req("path")?;
+    if !path.to_ascii_lowercase().ends_with(".hf") {
+        return Err(StudioError::Path {
+            path: path.into(),
+            reason: "only .hf files can be opened".into(),
+        });
+    }
+    let c = paths::existing(&sh.root, path)?;
+    let meta = std::fs::metadata(&c.full).map_err(io_at(&c.full))?;
+    if !meta.is_file() || meta.len() > MAX_BODY {
+        return Err(StudioError::Path {
+            path: path.into(),
+            reason: "not a file, or over 4 MiB".into(),
+        });
+    }
+    let src = std::fs::read_to_string(&c.full).map_err(io_at(&c.full))?;
+    Ok(Reply::text("text/plain; charset=utf-8", &src))
 }
 
 /// `name` without its `.hf` extension, plus `suffix`.

@@ -164,8 +164,11 @@ impl Browser {
             std::thread::sleep(Duration::from_millis(100));
         }
         let report = self.eval(
-            "JSON.stringify({status: document.getElementById('status').textContent, \
-             diag: document.getElementById('diagnostics').textContent, \
+            "JSON.stringify({url: location.href, ready: document.readyState, \
+             scripts: [typeof StudioCamera, typeof StudioViewer, typeof studio], \
+             res: performance.getEntriesByType('resource').map(e => [e.name, Math.round(e.startTime), Math.round(e.responseEnd)]), \
+             status: document.getElementById('status') && document.getElementById('status').textContent, \
+             diag: document.getElementById('diagnostics') && document.getElementById('diagnostics').textContent, \
              state: window.studio && studio.state && {gen: studio.state.gen, stage: studio.state.stage, error: studio.state.error}})",
         );
         panic!("timed out waiting for {what}: {report}");
@@ -371,6 +374,74 @@ fn studio_in_headless_chromium() {
         "the section did not change the image"
     );
     b.screenshot(&shots.join("05-section.png"));
+
+    // The camera refits when an edit changes the model's size, keeping the
+    // user's orbit; a small edit after a hand zoom keeps the zoom.
+    b.eval("(() => { const s = document.getElementById('sec-axis'); s.value = '-1'; s.dispatchEvent(new Event('change')); return true; })()");
+    let rect = b.eval(
+        "(() => { const r = document.getElementById('canvas').getBoundingClientRect(); \
+         return [r.left + r.width / 2, r.top + r.height / 2]; })()",
+    );
+    let (cx, cy) = (rect[0].as_f64().unwrap(), rect[1].as_f64().unwrap());
+    b.mouse("mousePressed", cx, cy);
+    for k in 1..=4 {
+        b.mouse("mouseMoved", cx + 20.0 * k as f64, cy + 8.0 * k as f64);
+    }
+    b.mouse("mouseReleased", cx + 80.0, cy + 32.0);
+    let orbit = b.eval("[studio.viewer.yaw, studio.viewer.pitch, studio.viewer.refits]");
+    assert!(
+        (orbit[0].as_f64().unwrap() + 0.785).abs() > 0.3,
+        "the drag did not orbit: {orbit}"
+    );
+    let big = b.eval("studio.viewer.pixelHash()");
+    let small = |r: f64| {
+        format!("my_model(x[3], a[1]) {{\n  my_model = {r}*{r} - x[1]*x[1] - x[2]*x[2] - x[3]*x[3];\n}}\n")
+    };
+    let gen = b.eval("studio.state.gen").as_u64().unwrap();
+    b.eval(&format!("studio.setSource({}); true", json!(small(0.3))));
+    b.wait_for(
+        &format!("studio.state.gen > {gen} && studio.state.done && studio.state.model && studio.state.model.bounds_source === 'proven' && studio.shown.gen === studio.state.gen && studio.shown.level === 1"),
+        "the small ball with proven bounds",
+        60,
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    let after = b.eval(
+        "[studio.viewer.yaw, studio.viewer.pitch, studio.viewer.refits, studio.viewer.lastRefit]",
+    );
+    assert_eq!(after[0], orbit[0], "the refit lost the orbit");
+    assert_eq!(after[1], orbit[1], "the refit lost the orbit");
+    assert_eq!(
+        after[2].as_u64().unwrap(),
+        orbit[2].as_u64().unwrap() + 1,
+        "{after}"
+    );
+    assert_eq!(after[3], "size");
+    // Without the refit the ball of radius 0.3 would cover about
+    // (0.3 / 0.85)^2 = 12 % of the pixels of the big one; refitted to its
+    // own box it fills the view as the big ball did its box.
+    let refit = b.eval("studio.viewer.pixelHash()");
+    let (l0, l1) = (big["lit"].as_f64().unwrap(), refit["lit"].as_f64().unwrap());
+    assert!(
+        l1 > 0.6 * l0,
+        "the small ball is not framed: {l1} lit pixels vs {l0}"
+    );
+    b.screenshot(&shots.join("06-refit.png"));
+    // Zoom in by hand, then grow the ball by 5 %: the view stays.
+    b.call(
+        "Input.dispatchMouseEvent",
+        json!({"type": "mouseWheel", "x": cx, "y": cy, "deltaX": 0, "deltaY": -400}),
+        true,
+    );
+    let zoomed = b.eval("[studio.viewer.dist, studio.viewer.refits]");
+    let gen = b.eval("studio.state.gen").as_u64().unwrap();
+    b.eval(&format!("studio.setSource({}); true", json!(small(0.315))));
+    b.wait_for(
+        &format!("studio.state.gen > {gen} && studio.state.done && studio.shown.gen === studio.state.gen && studio.shown.level === 1"),
+        "the slightly bigger ball",
+        60,
+    );
+    let kept = b.eval("[studio.viewer.dist, studio.viewer.refits]");
+    assert_eq!(kept, zoomed, "a 5 % edit undid the hand zoom");
     println!("screenshots in {}", shots.display());
     drop(b);
     studio.stop();
