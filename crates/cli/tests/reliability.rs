@@ -788,3 +788,61 @@ proptest! {
         let _ = std::fs::remove_dir_all(&d);
     }
 }
+
+/// Files named inside an input (a detached NRRD header's data file, the
+/// file a `--field` reads) are inputs too: no output may replace them, as
+/// the model, field or direct scan.
+#[test]
+fn files_named_inside_inputs_are_never_overwritten() {
+    let d = dir("inner-inputs");
+    let n = 8usize;
+    let mut data = Vec::new();
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let c = |v: usize| v as f64 - 3.5;
+                let inside = c(i).powi(2) + c(j).powi(2) + c(k).powi(2) < 9.0;
+                data.push(if inside { 1u8 } else { 0 });
+            }
+        }
+    }
+    for data_name in ["ball.raw", "ball.vtk", "ball.nrrd"] {
+        std::fs::write(d.join(data_name), &data).unwrap();
+        let hdr = d.join("det.nhdr");
+        std::fs::write(
+            &hdr,
+            format!(
+                "NRRD0004\ntype: uchar\ndimension: 3\nsizes: {n} {n} {n}\nspacings: 1 1 1\n\
+                 encoding: raw\ndata file: {data_name}\n"
+            ),
+        )
+        .unwrap();
+        let scan = format!("{}:iso=0.5", hdr.display());
+        let target = d.join(data_name).display().to_string();
+        // Directly as the model, and bound as a field of a HyperFun model.
+        let model = d.join("m.hf");
+        std::fs::write(&model, "my_model(x[3], a[1]) { my_model = ct(x); }").unwrap();
+        let field = format!("ct={scan}");
+        let m = model.display().to_string();
+        for args in [
+            vec!["voxels", scan.as_str(), "-o", &target, "--voxel", "2"],
+            vec![
+                "voxels",
+                &m,
+                "--field",
+                &field,
+                "-o",
+                &target,
+                "--voxel",
+                "2",
+                "--bounds",
+                "0,0,0,7,7,7",
+            ],
+        ] {
+            let o = run(&args);
+            assert_clear_error(&o, "input");
+            assert_eq!(std::fs::read(d.join(data_name)).unwrap(), data, "{args:?}");
+        }
+        std::fs::remove_file(d.join(data_name)).unwrap();
+    }
+}

@@ -290,7 +290,7 @@ pub fn load_with_progress(
                 kind: k,
                 hyperfun: None,
                 notes: f.notes,
-                inputs: vec![path.to_path_buf()],
+                inputs: f.files,
             })
         }
         None => {
@@ -417,7 +417,7 @@ pub fn bind_fields(opts: &LoadOptions, progress: Progress) -> Result<BoundFields
         let f = field(&src, kind, limit(opts), progress)?;
         out.notes
             .extend(f.notes.into_iter().map(|n| format!("{name}: {n}")));
-        out.inputs.push(p.to_path_buf());
+        out.inputs.extend(f.files);
         out.fields.push((name.clone(), f.field));
     }
     Ok(out)
@@ -432,6 +432,9 @@ pub struct BuiltField {
     pub bounds: Bounds,
     /// Warnings for the user.
     pub notes: Vec<String>,
+    /// Every file read for it (a scan's data files and slices as well as
+    /// the file named): no output of the run may replace them.
+    pub files: Vec<PathBuf>,
 }
 
 /// Builds the field of a mesh, scan or data source.
@@ -459,6 +462,7 @@ pub fn field(
                 field: Arc::new(b),
                 bounds,
                 notes: Vec::new(),
+                files: vec![path.to_path_buf()],
             })
         }
         SourceKind::HyperFun | SourceKind::Example => {
@@ -552,6 +556,7 @@ fn mesh_field(
         field: Arc::new(f),
         bounds,
         notes,
+        files: vec![path.to_path_buf()],
     })
 }
 
@@ -582,6 +587,9 @@ fn scan_field(
         bounds: Bounds::new(b[0], b[1]),
         field: f.into_field(),
         notes,
+        files: std::iter::once(path.to_path_buf())
+            .chain(vol.files.iter().cloned())
+            .collect(),
     })
 }
 

@@ -478,6 +478,9 @@ pub fn read_dicom_series(dir: &Path, opts: &ReadOptions, progress: Progress) -> 
         "LPS",
         opts,
     )?;
+    for s in &slices {
+        asm.add_file(&s.path);
+    }
     let n = slices.len() as u64;
     for (z, s) in slices.iter().enumerate() {
         if asm.wants(z) {

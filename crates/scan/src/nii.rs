@@ -160,6 +160,7 @@ pub fn read_nifti(path: &Path, opts: &ReadOptions, progress: Progress) -> Result
             found: 0,
         });
     }
+    asm.add_file(&data_path);
     stream_slices(
         &mut asm, &mut *data, ty, little, &data_path, vox_offset, progress,
     )?;

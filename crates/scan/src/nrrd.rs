@@ -115,6 +115,9 @@ pub fn read_nrrd(path: &Path, opts: &ReadOptions, progress: Progress) -> Result<
     } else {
         h.data_files.clone()
     };
+    for src in &sources {
+        asm.add_file(src);
+    }
     if encoding == Encoding::Text {
         return read_text(path, &h, &sources, attached, r, asm, ty, opts);
     }

@@ -135,6 +135,7 @@ pub fn read_raw(path: &Path, opts: &ReadOptions, progress: Progress) -> Result<V
         "unknown",
         opts,
     )?;
+    asm.add_file(&side);
     stream_slices(
         &mut asm,
         &mut BufReader::new(f),

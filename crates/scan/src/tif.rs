@@ -228,6 +228,9 @@ pub fn read_tiff_folder(dir: &Path, opts: &ReadOptions, progress: Progress) -> R
     }
     let plane = (w * h * 8) as u64;
     let mut asm = assembler(dir, [w, h, files.len()], ty, plane, opts)?;
+    for f in &files {
+        asm.add_file(f);
+    }
     let n = files.len();
     for (z, f) in files.iter().enumerate() {
         if asm.wants(z) {

@@ -131,6 +131,10 @@ pub struct Volume {
     pub frame: String,
     /// The file or folder it came from.
     pub source: PathBuf,
+    /// Every file read for it (a detached header's data files, a series'
+    /// slices, a `.hdr`'s `.img`, a sidecar): the files no output of the
+    /// same run may replace.
+    pub files: Vec<PathBuf>,
 }
 
 /// Options of every reader.
@@ -312,6 +316,7 @@ impl Volume {
             intercept: 0.0,
             frame: "unknown".into(),
             source: PathBuf::new(),
+            files: Vec::new(),
         })
     }
 
@@ -732,6 +737,8 @@ pub(crate) struct Assembler {
     scale: (f64, f64),
     compact: bool,
     frame: String,
+    /// Files read besides `path`.
+    files: Vec<PathBuf>,
 }
 
 impl Assembler {
@@ -843,7 +850,15 @@ impl Assembler {
             scale: compact_scale,
             compact,
             frame,
+            files: Vec::new(),
         })
+    }
+
+    /// Records a file read for this volume (see [`Volume::files`]).
+    pub(crate) fn add_file(&mut self, p: &Path) {
+        if p != self.path && !self.files.iter().any(|f| f == p) {
+            self.files.push(p.to_path_buf());
+        }
     }
 
     /// The file's dims.
@@ -948,6 +963,10 @@ impl Assembler {
         v.slope = self.scale.0;
         v.intercept = self.scale.1;
         v.frame = self.frame;
+        v.files = std::iter::once(self.path.clone())
+            .filter(|p| p.is_file())
+            .chain(self.files)
+            .collect();
         v.source = self.path;
         Ok(v)
     }
