@@ -846,3 +846,59 @@ fn files_named_inside_inputs_are_never_overwritten() {
         std::fs::remove_file(d.join(data_name)).unwrap();
     }
 }
+
+/// microfrep's own 3MF outputs read back: a beam lattice from `fill` is
+/// struts (with its skin), a level set says what it is and what to do.
+#[test]
+fn own_3mf_outputs_read_back_or_say_why_not() {
+    let d = dir("own-3mf");
+    let imp = d.join("imp.3mf").display().to_string();
+    let o = run(&[
+        "mesh",
+        "sphere",
+        "-o",
+        &imp,
+        "--implicit",
+        "--resolution",
+        "24",
+        "--quiet",
+    ]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert_clear_error(&run(&["eval", &imp, "0", "0", "0"]), "level set");
+    // A strut fill of a cube with a skin, as a beam lattice and a skin mesh.
+    let part = d.join("cube.hf");
+    std::fs::write(
+        &part,
+        "my_model(x[3], a[1]) { my_model = 10 - max(abs(x[1]), max(abs(x[2]), abs(x[3]))); }",
+    )
+    .unwrap();
+    let lat = d.join("lat.3mf").display().to_string();
+    let o = run(&[
+        "fill",
+        part.to_str().unwrap(),
+        "--bounds=-10,-10,-10,10,10,10",
+        "--structure",
+        "bcc",
+        "--cell",
+        "5",
+        "--density",
+        "0.2",
+        "--shell",
+        "1",
+        "-o",
+        &lat,
+        "--quiet",
+    ]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    // Inside the skin, at a strut (the cell centre of a bcc lattice) and
+    // outside the part.
+    let o = run(&["eval", &lat, "9.5", "0", "0", "0", "0", "0", "30", "0", "0"]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let v: Vec<f64> = o
+        .stdout
+        .split_whitespace()
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert!(v[0] > 0.0 && v[2] < 0.0, "{v:?}");
+    assert!(o.stderr.contains("beams"), "{}", o.stderr);
+}

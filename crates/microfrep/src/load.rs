@@ -15,7 +15,7 @@
 //! binds `NAME=SOURCE` as a function `NAME(x[3])` (the `--field` option of
 //! every verb).
 
-use microfrep_core::{Bounds, Expr, Field, Shape};
+use microfrep_core::{Bounds, Expr, Field, Interval, Shape};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -479,22 +479,37 @@ fn mesh_field(
 ) -> Result<BuiltField, LoadError> {
     use microfrep_meshfield::{BuildOptions, MeshField, SignMethod, TriMesh};
     src.check_keys(&["weld", "sign"])?;
+    let mut beams = None;
     let mesh = if src.path.to_ascii_lowercase().ends_with(".3mf") {
         let opts = microfrep_3mf::ReadOptions { memory_limit };
-        let parts = microfrep_3mf::read_meshes_with(path, &opts).map_err(|e| match e {
+        let err = |e| match e {
             // Already names the file.
             e @ microfrep_3mf::Error::Io { .. } => LoadError::ThreeMf(e),
             e => LoadError::ThreeMfFile {
                 path: path.to_path_buf(),
                 source: e,
             },
-        })?;
+        };
+        let model = microfrep_3mf::read_file_with(path, &opts).map_err(err)?;
+        let parts = microfrep_3mf::meshes_with(&model, memory_limit).map_err(err)?;
         let mut v = Vec::new();
         let mut t = Vec::new();
         for p in parts {
             let base = v.len() as u32;
             v.extend(p.vertices);
             t.extend(p.triangles.iter().map(|tri| tri.map(|i| i + base)));
+        }
+        // Beam lattices are struts: a field of their own, united with the
+        // triangles (a skin) when there are any.
+        beams = beam_field(&model, memory_limit, path)?;
+        if t.is_empty() {
+            if let Some(b) = beams {
+                return Ok(b);
+            }
+            return Err(LoadError::Options {
+                source_name: src.path.clone(),
+                message: empty_3mf_reason(&model),
+            });
         }
         TriMesh::new(v, t).map_err(|e| LoadError::MeshField {
             path: path.to_path_buf(),
@@ -552,12 +567,248 @@ fn mesh_field(
         std::array::from_fn(|a| bb[0][a] - pad[a]),
         std::array::from_fn(|a| bb[1][a] + pad[a]),
     );
-    Ok(BuiltField {
+    let mut built = BuiltField {
         field: Arc::new(f),
         bounds,
         notes,
         files: vec![path.to_path_buf()],
-    })
+    };
+    if let Some(b) = beams {
+        let (lo, hi) = (built.bounds.min, built.bounds.max);
+        built.bounds = Bounds::new(
+            std::array::from_fn(|a| lo[a].min(b.bounds.min[a])),
+            std::array::from_fn(|a| hi[a].max(b.bounds.max[a])),
+        );
+        built.notes.extend(b.notes);
+        built.field = Arc::new(UnionField {
+            name: format!("{} (triangles and beams)", built.field.name()),
+            a: built.field,
+            b: b.field,
+        });
+    }
+    Ok(built)
+}
+
+/// The beam lattices of a 3MF model as one strut field, if it has beams.
+fn beam_field(
+    model: &microfrep_3mf::Model,
+    memory_limit: u64,
+    path: &Path,
+) -> Result<Option<BuiltField>, LoadError> {
+    use microfrep_structures::strut_graph::StrutGraph;
+    let lattices =
+        microfrep_3mf::lattices_with(model, memory_limit).map_err(|e| LoadError::ThreeMfFile {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+    let mut g = StrutGraph {
+        nodes: Vec::new(),
+        beams: Vec::new(),
+        radii: Vec::new(),
+    };
+    for l in &lattices {
+        let base = g.nodes.len() as u32;
+        g.nodes.extend(&l.nodes);
+        for b in &l.beams {
+            g.beams.push((b.v1 + base, b.v2 + base));
+            g.radii.push([b.r1, b.r2]);
+        }
+    }
+    if g.beams.is_empty() {
+        return Ok(None);
+    }
+    let bad = |e: microfrep_structures::Error| LoadError::Options {
+        source_name: path.display().to_string(),
+        message: format!("its beam lattice: {e}"),
+    };
+    let bb = g.bounds().ok_or_else(|| LoadError::Options {
+        source_name: path.display().to_string(),
+        message: "its beam lattice has no extent".into(),
+    })?;
+    let f = g.field().map_err(bad)?;
+    let n = g.beams.len();
+    let mut built = BuiltField {
+        field: Arc::new(f),
+        bounds: Bounds::new(bb[0], bb[1]),
+        notes: vec![format!(
+            "{n} beams of the beam lattice read as struts (frustums with round ends)"
+        )],
+        files: vec![path.to_path_buf()],
+    };
+    // A clipping mesh keeps the struts inside (or outside) it.
+    let clips: Vec<(microfrep_3mf::ClipMode, u32)> = model
+        .objects
+        .iter()
+        .filter_map(|o| match &o.content {
+            microfrep_3mf::ObjectContent::Mesh(m) => m.beam_lattice.as_ref()?.clipping,
+            _ => None,
+        })
+        .filter(|c| c.0 != microfrep_3mf::ClipMode::None)
+        .collect();
+    match clips.as_slice() {
+        [] => {}
+        [(mode, id)] if lattices.len() == 1 => {
+            use microfrep_meshfield::{BuildOptions, MeshField, TriMesh};
+            let mesh = model.objects.iter().find_map(|o| match &o.content {
+                microfrep_3mf::ObjectContent::Mesh(m) if o.id == *id => Some(m),
+                _ => None,
+            });
+            let mesh = mesh.ok_or_else(|| LoadError::Options {
+                source_name: path.display().to_string(),
+                message: format!("its beam lattice is clipped by object {id}, which is not a mesh"),
+            })?;
+            let tm = TriMesh::new(mesh.vertices.clone(), mesh.triangles.clone()).map_err(|e| {
+                LoadError::MeshField {
+                    path: path.to_path_buf(),
+                    source: e,
+                }
+            })?;
+            let opts = BuildOptions {
+                name: "clipping mesh".into(),
+                memory_limit,
+                ..BuildOptions::default()
+            };
+            let clip =
+                MeshField::build(&tm, &opts, &|_, _| {}).map_err(|e| LoadError::MeshField {
+                    path: path.to_path_buf(),
+                    source: e,
+                })?;
+            let inside = *mode == microfrep_3mf::ClipMode::Inside;
+            built.field = Arc::new(ClipField {
+                name: format!("{n} beams clipped by a mesh"),
+                beams: built.field,
+                clip: Arc::new(clip),
+                inside,
+            });
+            built.notes.push(format!(
+                "the struts are clipped to {} of the lattice's clipping mesh",
+                if inside { "the inside" } else { "the outside" }
+            ));
+        }
+        _ => {
+            return Err(LoadError::Options {
+                source_name: path.display().to_string(),
+                message: "several beam lattices with clipping meshes are not read yet; write \
+                          one lattice, or give its triangles (--triangles)"
+                    .into(),
+            })
+        }
+    }
+    Ok(Some(built))
+}
+
+/// Struts kept inside (`min(beams, clip)`) or outside (`min(beams, -clip)`)
+/// a clipping mesh.
+#[derive(Debug)]
+struct ClipField {
+    name: String,
+    beams: Arc<dyn Field>,
+    clip: Arc<dyn Field>,
+    inside: bool,
+}
+
+impl ClipField {
+    fn sign(&self) -> f64 {
+        if self.inside {
+            1.0
+        } else {
+            -1.0
+        }
+    }
+}
+
+impl Field for ClipField {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn eval(&self, p: [f64; 3]) -> f64 {
+        self.beams.eval(p).min(self.sign() * self.clip.eval(p))
+    }
+    fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let (vb, gb) = self.beams.grad(p);
+        let (vc, gc) = self.clip.grad(p);
+        let s = self.sign();
+        if vb <= s * vc {
+            (vb, gb)
+        } else {
+            (s * vc, gc.map(|g| s * g))
+        }
+    }
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        let c = self.clip.interval(b);
+        let c = if self.inside { c } else { c.neg() };
+        self.beams.interval(b).min(c)
+    }
+    fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        let mut c = vec![0.0f32; out.len()];
+        self.beams.eval_batch(x, y, z, out);
+        self.clip.eval_batch(x, y, z, &mut c);
+        let s = self.sign() as f32;
+        for (o, v) in out.iter_mut().zip(c) {
+            *o = o.min(s * v);
+        }
+    }
+}
+
+/// Why a 3MF package gives no solid: what it holds, and what to do.
+fn empty_3mf_reason(model: &microfrep_3mf::Model) -> String {
+    use microfrep_3mf::ObjectContent;
+    let level_sets = model
+        .objects
+        .iter()
+        .filter(|o| matches!(o.content, ObjectContent::LevelSet(_)))
+        .count();
+    if level_sets > 0 {
+        format!(
+            "the package holds {level_sets} level set object(s) (the volumetric and implicit \
+             extensions) and no triangles or beams: microfrep reads meshes and beam lattices \
+             from 3MF; load the model it was written from (the .hf, or the example), or write \
+             the 3MF without --implicit"
+        )
+    } else if !model.slice_stacks.is_empty() {
+        "the package holds slice stacks and no triangles or beams: slices are a print job, \
+         not a solid to load; load the model they were sliced from"
+            .into()
+    } else {
+        "the package's build holds no triangles and no beams".into()
+    }
+}
+
+/// The union (larger value) of two fields: a mesh's skin and its struts.
+#[derive(Debug)]
+struct UnionField {
+    name: String,
+    a: Arc<dyn Field>,
+    b: Arc<dyn Field>,
+}
+
+impl Field for UnionField {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn eval(&self, p: [f64; 3]) -> f64 {
+        self.a.eval(p).max(self.b.eval(p))
+    }
+    fn grad(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let (va, ga) = self.a.grad(p);
+        let (vb, gb) = self.b.grad(p);
+        if va >= vb {
+            (va, ga)
+        } else {
+            (vb, gb)
+        }
+    }
+    fn interval(&self, b: [Interval; 3]) -> Interval {
+        self.a.interval(b).max(self.b.interval(b))
+    }
+    fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        let mut other = vec![0.0f32; out.len()];
+        self.a.eval_batch(x, y, z, out);
+        self.b.eval_batch(x, y, z, &mut other);
+        for (o, v) in out.iter_mut().zip(other) {
+            *o = o.max(v);
+        }
+    }
 }
 
 fn scan_field(
@@ -755,6 +1006,85 @@ mod tests {
         let inside = pe.eval([0.1, 0.1, 0.1]);
         let outside = pe.eval([1.0, 1.0, 1.0]);
         assert!(inside > 0.0 && outside < 0.0, "{inside} {outside}");
+    }
+
+    /// Beam lattices read back as struts: alone, united with a skin mesh,
+    /// clipped by a mesh; a package with neither triangles nor beams says
+    /// what it holds.
+    #[test]
+    fn beam_lattice_3mf_packages_read_back_as_struts() {
+        use microfrep_3mf::{
+            write_file, BeamLattice, ClipMode, Mesh, Model, Transform, Unit, WriteOptions,
+        };
+        // One beam along x from 0 to 10, radius 1 (and 0.5 at the far end
+        // in the clipped case).
+        let write = |name: &str, skin: bool, clip: bool| {
+            let mut m = Model::new(Unit::Millimeter);
+            let clip_id =
+                clip.then(|| m.add_mesh(Some("clip"), Mesh::cuboid([-2.0; 3], [5.0, 2.0, 2.0])));
+            let mut l = BeamLattice::new(1.0, 1e-4);
+            l.push(0, 1, 1.0, 1.0);
+            if let Some(c) = clip_id {
+                l.clipping = Some((ClipMode::Inside, c));
+            }
+            if skin {
+                let s = m.add_mesh(
+                    Some("skin"),
+                    Mesh::cuboid([20.0, -1.0, -1.0], [22.0, 1.0, 1.0]),
+                );
+                m.add_item(s, Transform::IDENTITY);
+            }
+            let id = m.add_mesh(
+                Some("lattice"),
+                Mesh {
+                    vertices: vec![[0.0; 3], [10.0, 0.0, 0.0]],
+                    beam_lattice: Some(l),
+                    ..Mesh::default()
+                },
+            );
+            m.add_item(id, Transform::IDENTITY);
+            let p = temp(name);
+            write_file(&p, &m, &WriteOptions::default()).unwrap();
+            p
+        };
+        let at = |p: &std::path::Path, q: [f64; 3]| {
+            let l = load(p.to_str().unwrap(), &LoadOptions::default()).unwrap();
+            l.shape.point().eval(q)
+        };
+        let alone = write("beams.3mf", false, false);
+        assert!((at(&alone, [5.0, 0.0, 0.0]) - 1.0).abs() < 1e-9);
+        assert!((at(&alone, [5.0, 2.0, 0.0]) + 1.0).abs() < 1e-9);
+        // The round end: 1 - 0.5 at half a radius past the end.
+        assert!((at(&alone, [10.5, 0.0, 0.0]) - 0.5).abs() < 1e-9);
+        let l = load(alone.to_str().unwrap(), &LoadOptions::default()).unwrap();
+        assert!(
+            l.notes.iter().any(|n| n.contains("1 beams")),
+            "{:?}",
+            l.notes
+        );
+        assert!(l.shape.bounds().unwrap().max[0] >= 11.0);
+        // With a skin: both are solid.
+        let both = write("skin-beams.3mf", true, false);
+        assert!(at(&both, [5.0, 0.0, 0.0]) > 0.5);
+        assert!(at(&both, [21.0, 0.0, 0.0]) > 0.5);
+        assert!(at(&both, [15.0, 0.0, 0.0]) < 0.0);
+        // Clipped to x <= 5: the far half is gone.
+        let clipped = write("clipped.3mf", false, true);
+        assert!(at(&clipped, [3.0, 0.0, 0.0]) > 0.5);
+        assert!(at(&clipped, [7.0, 0.0, 0.0]) < 0.0);
+        // Neither triangles nor beams: what the package holds.
+        let mut m = Model::new(Unit::Millimeter);
+        let s = m.slice_stacks.len();
+        assert_eq!(s, 0);
+        let empty = temp("empty.3mf");
+        let id = m.add_mesh(Some("nothing"), Mesh::default());
+        m.add_item(id, Transform::IDENTITY);
+        if write_file(&empty, &m, &WriteOptions::default()).is_ok() {
+            let e = load(empty.to_str().unwrap(), &LoadOptions::default())
+                .err()
+                .unwrap();
+            assert!(e.to_string().contains("no triangles and no beams"), "{e}");
+        }
     }
 
     #[test]
