@@ -902,3 +902,25 @@ fn own_3mf_outputs_read_back_or_say_why_not() {
     assert!(v[0] > 0.0 && v[2] < 0.0, "{v:?}");
     assert!(o.stderr.contains("beams"), "{}", o.stderr);
 }
+
+/// A flat mesh encloses nothing: said as such, not as cells too fine.
+#[test]
+fn flat_meshes_are_refused_as_flat() {
+    let d = dir("flat");
+    let stl = d.join("flat.stl");
+    std::fs::write(
+        &stl,
+        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n\
+         endloop\nendfacet\nfacet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\n\
+         vertex 1 0 0\nendloop\nendfacet\nendsolid t\n",
+    )
+    .unwrap();
+    let out = d.join("o.stl").display().to_string();
+    for args in [
+        vec!["mesh", stl.to_str().unwrap(), "-o", &out],
+        vec!["analyze", stl.to_str().unwrap()],
+    ] {
+        assert_clear_error(&run(&args), "the mesh is flat: its extent along z is 0");
+    }
+    assert!(!Path::new(&out).exists());
+}

@@ -519,6 +519,19 @@ fn mesh_field(
         let opts = microfrep_meshfield::read::ReadOptions { memory_limit };
         microfrep_meshfield::read::read_mesh_with(path, &opts)?
     };
+    // A flat mesh (a single sheet, a 2D drawing) bounds no volume.
+    if let Some(bb) = mesh_extent(&mesh.vertices) {
+        let size: [f64; 3] = std::array::from_fn(|a| bb[1][a] - bb[0][a]);
+        let big = size.iter().cloned().fold(0.0, f64::max);
+        if let Some(a) = (0..3).find(|&a| size[a] <= 1e-9 * big) {
+            return Err(src.bad(format!(
+                "the mesh is flat: its extent along {} is {}, so it encloses no volume and is \
+                 no solid to mesh, fill, slice or analyse",
+                ["x", "y", "z"][a],
+                size[a]
+            )));
+        }
+    }
     let weld = src.number("weld")?.unwrap_or(0.0);
     if weld < 0.0 {
         return Err(src.bad(format!("weld={weld} must not be negative")));
@@ -587,6 +600,17 @@ fn mesh_field(
         });
     }
     Ok(built)
+}
+
+/// The box of a mesh's vertices, if it has any.
+fn mesh_extent(v: &[[f64; 3]]) -> Option<[[f64; 3]; 2]> {
+    let first = *v.first()?;
+    Some(v.iter().fold([first, first], |[lo, hi], p| {
+        [
+            std::array::from_fn(|a| lo[a].min(p[a])),
+            std::array::from_fn(|a| hi[a].max(p[a])),
+        ]
+    }))
 }
 
 /// The beam lattices of a 3MF model as one strut field, if it has beams.

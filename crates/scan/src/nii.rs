@@ -110,7 +110,18 @@ pub fn read_nifti(path: &Path, opts: &ReadOptions, progress: Progress) -> Result
         _ => 1.0, // 2 = mm; 0 = unknown, taken as mm
     };
     let geometry = geometry(&h, unit);
-    let scale = if h.scl_slope != 0.0 && h.scl_slope.is_finite() {
+    // scl_slope 0 means "no scaling"; NaN or infinite scaling is broken.
+    if !(h.scl_slope.is_finite() && h.scl_inter.is_finite()) {
+        return Err(header(
+            path,
+            "scl_slope / scl_inter (bytes 112, 116)",
+            format!(
+                "the intensity scaling (slope {}, intercept {}) is not finite",
+                h.scl_slope, h.scl_inter
+            ),
+        ));
+    }
+    let scale = if h.scl_slope != 0.0 {
         (h.scl_slope as f64, h.scl_inter as f64)
     } else {
         (1.0, 0.0)

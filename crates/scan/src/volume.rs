@@ -712,8 +712,15 @@ impl Geometry {
     }
 }
 
+/// Length of `v`, scaled so that very large and very small finite
+/// components neither overflow nor underflow.
 pub(crate) fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    let m = v.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    if m == 0.0 || !m.is_finite() {
+        return m;
+    }
+    let s = v.map(|c| c / m);
+    m * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt()
 }
 
 /// Collects the slices of a file into a [`Volume`], keeping only the crop,

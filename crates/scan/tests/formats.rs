@@ -525,6 +525,20 @@ fn nifti_nii_and_nii_gz_with_scaling_and_sform() {
         Volume::open(&t, &ReadOptions::default()),
         Err(ScanError::Header { .. })
     ));
+    // An infinite or NaN scaling is refused, not ignored.
+    for bad in [f32::INFINITY, f32::NAN] {
+        let mut b = bytes.clone();
+        let at = if bad.is_nan() { 116 } else { 112 };
+        let v = if h.endianness == nifti::Endianness::Big {
+            bad.to_be_bytes()
+        } else {
+            bad.to_le_bytes()
+        };
+        b[at..at + 4].copy_from_slice(&v);
+        std::fs::write(&t, &b).unwrap();
+        let e = Volume::open(&t, &ReadOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("not finite"), "{e}");
+    }
 }
 
 #[test]
