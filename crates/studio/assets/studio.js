@@ -160,7 +160,9 @@
       const div = document.createElement("div");
       div.className = "okline";
       const m = st.model;
-      div.textContent = `ok: object ${m.object}${m.lowered ? "" : " (evaluated per point: no interval pruning)"}`;
+      const parts = (st.parts || []).map((p) =>
+        ` · ${p.name} = ${p.source} (${p.kind}${p.cached ? "" : `, built in ${fmt(p.seconds, 2)} s`})`).join("");
+      div.textContent = `ok: object ${m.object}${m.lowered ? "" : " (evaluated per point: no interval pruning)"}${parts}`;
       box.appendChild(div);
     }
   }
@@ -263,7 +265,7 @@
     const changed = !app.bounds || JSON.stringify(app.bounds) !== JSON.stringify(b);
     const first = !app.bounds;
     app.bounds = b;
-    $("bounds-src").textContent = { page: "(set here)", comment: "(comment)", proven: "(proven)" }[m.bounds_source] || "";
+    $("bounds-src").textContent = { page: "(set here)", comment: "(comment)", part: "(the part's box)", proven: "(proven)" }[m.bounds_source] || "";
     if (changed) {
       const box = $("bounds-inputs");
       box.textContent = "";

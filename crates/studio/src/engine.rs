@@ -10,11 +10,12 @@
 
 use microfrep_analysis::AnalyzeOptions;
 use microfrep_core::shape::BoundsOptions;
-use microfrep_core::{BatchEval, PointEval, Shape};
+use microfrep_core::{BatchEval, Field, Interval, PointEval, Shape};
 use microfrep_hyperfun::{lower, Diagnostic, Diagnostics, Severity};
 use microfrep_mesh::{memory, MeshOptions, Plan};
 use rayon::prelude::*;
 use serde_json::Value;
+use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::Path;
 use std::sync::{Arc, Once};
@@ -40,6 +41,9 @@ pub enum EngineError {
     /// The model's bounds could not be found.
     #[error("{0}")]
     Bounds(#[from] microfrep_core::BoundsError),
+    /// A data field (a mesh, scan or CSV part) could not be read or built.
+    #[error("{0}")]
+    Part(#[from] microfrep::LoadError),
     /// Encoding an output in memory failed.
     #[error("encoding {what}")]
     Encode {
@@ -108,14 +112,50 @@ fn diag_of(d: &Diagnostic) -> Diag {
     }
 }
 
+/// The parameter kinds of a function HyperFun knows: a built-in, or one of
+/// `registry` (the standard library plus bound data fields). What
+/// `microfrep_hyperfun::parse_with` does with the standard registry only.
+fn signature(
+    registry: &microfrep_hyperfun::library::Registry,
+    name: &str,
+) -> Option<Vec<microfrep_hyperfun::ParamKind>> {
+    use microfrep_hyperfun::{library::Kind, ParamKind};
+    if let Some(&(_, n)) = lower::ops::BUILTINS.iter().find(|(b, _)| *b == name) {
+        return Some(vec![ParamKind::Real; n]);
+    }
+    let f = registry.get(name)?;
+    Some(
+        f.kinds
+            .iter()
+            .map(|k| match k {
+                Kind::A => ParamKind::Array,
+                Kind::R => ParamKind::Real,
+            })
+            .collect(),
+    )
+}
+
 /// Parses and lowers object `object` (default `my_model`, else the first)
-/// of `src` with `a[1..] = params`; the other objects are lowered too, as
-/// `microfrep check` does, so their errors are reported (the model is
-/// still returned when only those fail).
-pub fn load(src: &str, file: &str, object: Option<&str>, params: &[f64]) -> LoadResult {
+/// of `src` with `a[1..] = params` and the data `fields` callable as
+/// `NAME(x)`; the other objects are lowered too, as `microfrep check` does,
+/// so their errors are reported (the model is still returned when only
+/// those fail).
+pub fn load(
+    src: &str,
+    file: &str,
+    object: Option<&str>,
+    params: &[f64],
+    fields: &[(String, Arc<dyn Field>)],
+) -> LoadResult {
     install();
     let options = microfrep_hyperfun::Options::default();
-    let (program, mut items) = match microfrep_hyperfun::parse_with(src, file, options) {
+    let mut registry = microfrep_hyperfun::library::Registry::standard();
+    for (name, f) in fields {
+        registry.register_field(name, f.clone());
+    }
+    let table = |name: &str| signature(&registry, name);
+    let parsed = microfrep_hyperfun::parse_with_table(src, file, options, &table);
+    let (program, mut items) = match parsed {
         Ok((p, warnings)) => (Arc::new(p), warnings.items),
         Err(d) => {
             return LoadResult {
@@ -125,7 +165,6 @@ pub fn load(src: &str, file: &str, object: Option<&str>, params: &[f64]) -> Load
             }
         }
     };
-    let registry = microfrep_hyperfun::library::Registry::standard();
     let mut unlocated = Vec::new();
     let chosen = lower::select_object(&program, object);
     let mut model = None;
@@ -200,6 +239,126 @@ pub fn prove_bounds(
         ..BoundsOptions::default()
     };
     Ok(shape.bounds_with(&opts)?.corners())
+}
+
+/// A data field read from a file under the working directory (a mesh or
+/// scan part, or measured data), which models call by name.
+pub struct Part {
+    /// The field: positive inside, distances in the file's units for meshes
+    /// and scans.
+    pub field: Arc<dyn Field>,
+    /// A box holding the field's solid.
+    pub bounds: [[f64; 3]; 2],
+    /// `mesh`, `scan` or `data`.
+    pub kind: &'static str,
+    /// Warnings (an open mesh, a repaired orientation, ...).
+    pub notes: Vec<String>,
+    /// Seconds reading and building took.
+    pub seconds: f64,
+}
+
+/// Reads `path` (already resolved) with the source options `options`
+/// (`weld=`, `iso=`, ... as after the colon of `FILE:key=value`) and builds
+/// its field with the loader every microfrep verb uses
+/// ([`microfrep::load::field`]). `progress(stage, done, total)` is called
+/// as the build goes.
+pub fn build_part(
+    path: &Path,
+    options: BTreeMap<String, String>,
+    memory_limit: u64,
+    progress: &(dyn Fn(&str, u64, u64) + Sync),
+) -> Result<Part, EngineError> {
+    use microfrep::load::{self as ld, SourceKind};
+    let t = std::time::Instant::now();
+    let src = ld::Source {
+        path: path.to_string_lossy().into_owned(),
+        options,
+    };
+    let kind = match ld::kind_of(path) {
+        Some(SourceKind::Mesh) => ("mesh", SourceKind::Mesh),
+        Some(SourceKind::Scan) => ("scan", SourceKind::Scan),
+        Some(SourceKind::Data) => ("data", SourceKind::Data),
+        _ => {
+            return Err(EngineError::Limit(format!(
+                "{}: a field is a mesh (.stl .obj .ply .3mf), a scan (.nrrd .nii .tif, a DICOM \
+                 or TIFF folder, .raw) or data (.csv)",
+                path.display()
+            )))
+        }
+    };
+    let f = ld::field(&src, kind.1, memory_limit, progress)?;
+    Ok(Part {
+        field: f.field,
+        bounds: f.bounds.corners(),
+        kind: kind.0,
+        notes: f.notes,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// Whether intervals prove the model empty (`f < 0`) everywhere outside
+/// `inner` within the cube `|x|, |y|, |z| < 1e6` that bounds searches
+/// start from: then `inner` is a sound box for it (a part's box, when the
+/// part bounds the model). The 26 boxes around `inner` are split in halves
+/// along their longest side until each piece is decided, at most `budget`
+/// interval evaluations; false when the budget runs out or some piece may
+/// hold solid. `check` is called every 256 evaluations.
+pub fn empty_outside(
+    shape: &Shape,
+    inner: [[f64; 3]; 2],
+    budget: usize,
+    check: &(dyn Fn() + Sync),
+) -> bool {
+    const FAR: f64 = 1e6;
+    if (0..3).any(|a| !(inner[0][a] > -FAR && inner[1][a] < FAR && inner[0][a] < inner[1][a])) {
+        return false;
+    }
+    let cuts = |a: usize| [-FAR, inner[0][a], inner[1][a], FAR];
+    let mut todo: Vec<[[f64; 3]; 2]> = Vec::new();
+    for k in 0..27 {
+        let c = [k % 3, k / 3 % 3, k / 9];
+        if c == [1, 1, 1] {
+            continue;
+        }
+        todo.push([
+            std::array::from_fn(|a| cuts(a)[c[a]]),
+            std::array::from_fn(|a| cuts(a)[c[a] + 1]),
+        ]);
+    }
+    let mut ev = shape.interval();
+    let mut pe = shape.point();
+    let mut evals = 0;
+    while let Some(b) = todo.pop() {
+        if evals >= budget {
+            return false;
+        }
+        evals += 1;
+        if evals % 256 == 0 {
+            check();
+        }
+        let iv = |a: usize| Interval::new(b[0][a], b[1][a]);
+        let r = ev.eval(iv(0), iv(1), iv(2));
+        if !(r.is_nan() || r.hi >= 0.0) {
+            continue;
+        }
+        // Solid at the centre: the model reaches out of `inner`.
+        if pe.eval(std::array::from_fn(|a| 0.5 * (b[0][a] + b[1][a]))) >= 0.0 {
+            return false;
+        }
+        let a = (0..3)
+            .max_by(|&i, &j| (b[1][i] - b[0][i]).total_cmp(&(b[1][j] - b[0][j])))
+            .unwrap_or(0);
+        let mid = 0.5 * (b[0][a] + b[1][a]);
+        if !(mid > b[0][a] && mid < b[1][a]) {
+            return false;
+        }
+        let (mut lo, mut hi) = (b, b);
+        lo[1][a] = mid;
+        hi[0][a] = mid;
+        todo.push(lo);
+        todo.push(hi);
+    }
+    true
 }
 
 /// What evaluating the model at a few points showed.
@@ -533,9 +692,89 @@ mod tests {
     }
 
     #[test]
+    fn part_boxes_are_checked_by_intervals() {
+        let p = Expr::xyz();
+        let ball = Shape::new(prims::sphere(&p, &prims::v3([0.0; 3]), 0.5));
+        assert!(empty_outside(&ball, [[-0.6; 3], [0.6; 3]], 10_000, &|| {}));
+        // The ball reaches out of a smaller box, or one beside it.
+        assert!(!empty_outside(&ball, [[-0.4; 3], [0.4; 3]], 10_000, &|| {}));
+        assert!(!empty_outside(&ball, [[0.1; 3], [2.0; 3]], 10_000, &|| {}));
+        // Out of budget: not proven.
+        assert!(!empty_outside(&ball, [[-0.6; 3], [0.6; 3]], 3, &|| {}));
+        // A lattice is everywhere.
+        let wave = Shape::new(p[0].clone().sin());
+        assert!(!empty_outside(&wave, [[-0.6; 3], [0.6; 3]], 10_000, &|| {}));
+    }
+
+    #[test]
+    fn a_mesh_file_becomes_a_part_that_models_call() {
+        // The cube [0, 2]^3, outward-facing.
+        let v = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 2.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [0.0, 0.0, 2.0],
+            [2.0, 0.0, 2.0],
+            [2.0, 2.0, 2.0],
+            [0.0, 2.0, 2.0],
+        ];
+        let t = [
+            [0, 2, 1],
+            [0, 3, 2],
+            [4, 5, 6],
+            [4, 6, 7],
+            [0, 1, 5],
+            [0, 5, 4],
+            [3, 7, 6],
+            [3, 6, 2],
+            [0, 4, 7],
+            [0, 7, 3],
+            [1, 2, 6],
+            [1, 6, 5],
+        ];
+        let m = MeshData {
+            vertices: v.to_vec(),
+            triangles: t.to_vec(),
+            ..MeshData::default()
+        };
+        let dir = std::env::temp_dir().join(format!("mf-studio-part-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("cube.stl");
+        std::fs::write(&path, stl_bytes(&m).unwrap()).unwrap();
+        let part = build_part(&path, BTreeMap::new(), 1 << 30, &|_, _, _| {}).unwrap();
+        assert_eq!(part.kind, "mesh");
+        for a in 0..3 {
+            assert!(part.bounds[0][a] < 0.0 && part.bounds[0][a] > -0.01);
+            assert!(part.bounds[1][a] > 2.0 && part.bounds[1][a] < 2.01);
+        }
+        assert!((part.field.eval([1.0, 1.0, 1.0]) - 1.0).abs() < 1e-9);
+        assert!((part.field.eval([1.0, 1.0, 3.0]) + 1.0).abs() < 1e-9);
+        let src = "my_model(x[3], a[1]) { my_model = cube(x) - 0.5; }";
+        let fields = vec![("cube".to_string(), part.field.clone())];
+        let r = load(src, "t.hf", None, &[], &fields);
+        assert!(r.diags.is_empty(), "{}", r.rendered);
+        let shape = r.model.unwrap().shape;
+        assert!((shape.point().eval([1.0, 1.0, 1.0]) - 0.5).abs() < 1e-9);
+        // The cube's box, padded, holds the model; unbound, `cube` is unknown.
+        assert!(empty_outside(&shape, [[-0.1; 3], [2.1; 3]], 50_000, &|| {}));
+        let r = load(src, "t.hf", None, &[], &[]);
+        assert!(
+            r.rendered.contains("'cube' is not a known function"),
+            "{}",
+            r.rendered
+        );
+        // Not a data source.
+        let hf = dir.join("m.hf");
+        std::fs::write(&hf, src).unwrap();
+        assert!(build_part(&hf, BTreeMap::new(), 1 << 30, &|_, _, _| {}).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn diagnostics_match_check() {
         let src = "my_model(x[3], a[1]) {\n  my_model = 1 - ;\n}\nother(x[3], a[1]) {\n  other = zz(x);\n}\n";
-        let r = load(src, "t.hf", None, &[]);
+        let r = load(src, "t.hf", None, &[], &[]);
         assert!(r.model.is_none());
         assert_eq!(r.diags[0].line, 2);
         assert!(r.diags[0].error);
@@ -543,20 +782,21 @@ mod tests {
         // The evaluated object is fine, another object is not: the error is
         // reported and the model still shown.
         let src = "my_model(x[3], a[1]) {\n  my_model = 1 - x[1];\n}\nother(x[3], a[1]) {\n  other = mfTpms(x, 9, 0, 1, 0);\n}\n";
-        let r = load(src, "t.hf", None, &[]);
+        let r = load(src, "t.hf", None, &[], &[]);
         assert!(
             r.diags.iter().any(|d| d.error && d.line == 5),
             "{:?}",
             r.diags
         );
         assert_eq!(r.model.unwrap().object, "my_model");
-        let r = load(src, "t.hf", Some("other"), &[]);
+        let r = load(src, "t.hf", Some("other"), &[], &[]);
         assert!(r.model.is_none());
         let ok = load(
             "my_model(x[3], a[2]) { my_model = a[1] - x[1]; }",
             "t.hf",
             None,
             &[0.5],
+            &[],
         );
         let m = ok.model.unwrap();
         assert_eq!(

@@ -6,6 +6,9 @@
 //!   box` works too), as the example models write it.
 //! - Parameters: a comment `a[K] = V` sets the default of `a[K]`, and
 //!   `a[K] = V in [LO, HI]` also the slider's range.
+//! - Data fields: `--field NAME=SOURCE` in a comment (the CLI's option, as
+//!   `microfrep fill` writes it in its header) binds a mesh, scan or CSV
+//!   file under the working directory as the function `NAME(x)`.
 
 /// Text of all `--` comments, joined with spaces (a comment that starts
 /// inside a line counts too).
@@ -160,6 +163,45 @@ pub fn param_hints(src: &str) -> Vec<ParamHint> {
     out
 }
 
+/// The `--field NAME=SOURCE` bindings of the comments, first one per name
+/// (names compared case-insensitively, as HyperFun does). `SOURCE` runs to
+/// the next white space, less a trailing `.`, `,`, `;` or `)`.
+pub fn field_hints(src: &str) -> Vec<(String, String)> {
+    let text = comment_text(src);
+    let mut out: Vec<(String, String)> = Vec::new();
+    let mut from = 0;
+    while let Some(k) = text[from..].find("--field") {
+        let mut i = from + k + "--field".len();
+        from = i;
+        let b = text.as_bytes();
+        if i < b.len() && !b[i].is_ascii_whitespace() {
+            continue;
+        }
+        while i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let name_at = i;
+        while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+            i += 1;
+        }
+        let name = &text[name_at..i];
+        if name.is_empty() || b[name_at].is_ascii_digit() || b.get(i) != Some(&b'=') {
+            continue;
+        }
+        let spec_at = i + 1;
+        let end = text[spec_at..]
+            .find(|c: char| c.is_whitespace())
+            .map_or(text.len(), |e| spec_at + e);
+        let spec = text[spec_at..end].trim_end_matches(['.', ',', ';', ')']);
+        from = end;
+        if spec.is_empty() || out.iter().any(|(n, _)| n.eq_ignore_ascii_case(name)) {
+            continue;
+        }
+        out.push((name.to_string(), spec.to_string()));
+    }
+    out
+}
+
 /// A slider range about `v`: from the hint, else `[v - |v|, v + |v|]`
 /// (`[-1, 1]` about 0).
 pub fn default_range(v: f64, hint: Option<[f64; 2]>) -> [f64; 2] {
@@ -215,5 +257,23 @@ mod tests {
         assert_eq!(default_range(0.5, None), [0.0, 1.0]);
         assert_eq!(default_range(-2.0, None), [-4.0, 0.0]);
         assert_eq!(default_range(0.0, None), [-1.0, 1.0]);
+    }
+
+    #[test]
+    fn field_bindings() {
+        // The header `microfrep fill` writes, and a second binding.
+        let src = "-- Made by `microfrep fill`: gyroid.\n-- The part is a data field: load with --field part=parts/femur.stl:weld=0.01\n\
+                   -- and --field Density=d.csv. Also --field part=other.stl, --fieldx a=b,\n\
+                   -- --field 9a=x.stl --field bad x.stl\nmy_model(x[3], a[1]) { my_model = part(x); }\n\
+                   -- --field tail=t.nrrd:iso=300";
+        assert_eq!(
+            field_hints(src),
+            vec![
+                ("part".into(), "parts/femur.stl:weld=0.01".into()),
+                ("Density".into(), "d.csv".into()),
+                ("tail".into(), "t.nrrd:iso=300".into()),
+            ]
+        );
+        assert!(field_hints("my_model(x[3], a[1]) { my_model = part(x); }").is_empty());
     }
 }

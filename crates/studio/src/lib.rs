@@ -9,6 +9,12 @@
 //! surface area, components, percolation) and exports (STL, slice stacks,
 //! the model). Page, scripts and styles are compiled into the binary.
 //!
+//! Models may call data fields by name: a comment `--field NAME=SOURCE`
+//! (as `microfrep fill` writes it) or the edit's `fields` binds a mesh,
+//! scan or CSV file under the working directory, built once per server and
+//! kept; a model that its part bounds takes the part's box without a bounds
+//! search, so a mesh part's first image comes as fast as a formula's.
+//!
 //! Each tab is a session. An edit starts a new generation; a worker lowers
 //! it, finds the box, probes the evaluation cost, then meshes it from
 //! coarse to fine ([`ServeOptions::levels`]) and analyses it quickly, then
@@ -50,6 +56,7 @@ pub mod engine;
 mod error;
 mod export;
 pub mod hints;
+mod parts;
 pub mod paths;
 mod server;
 pub mod session;
@@ -175,7 +182,7 @@ impl Studio {
         ));
         std::fs::create_dir_all(&scratch).map_err(error::io_at(&scratch))?;
         let shared = Arc::new(server::Shared {
-            sessions: session::Sessions::new(cfg),
+            sessions: session::Sessions::new(cfg, root.clone()),
             root,
             initial,
             addr,

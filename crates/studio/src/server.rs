@@ -514,12 +514,35 @@ fn edit(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> 
         None | Some(Value::Null) => None,
         Some(b) => Some(parse_bounds(b)?),
     };
+    let fields = match v.get("fields") {
+        None | Some(Value::Null) => Vec::new(),
+        Some(Value::Object(m)) => m
+            .iter()
+            .map(|(name, spec)| {
+                let ident = name.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+                    && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+                match spec.as_str() {
+                    Some(s) if ident && !s.is_empty() => Ok((name.clone(), s.to_string())),
+                    _ => Err(StudioError::Request(format!(
+                        "fields: '{name}' must be a name bound to a source string, e.g. \
+                         {{\"part\": \"femur.stl\"}}"
+                    ))),
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+        Some(_) => {
+            return Err(StudioError::Request(
+                "fields must be an object of NAME: SOURCE".into(),
+            ))
+        }
+    };
     let gen = s.edit(Edit {
         source,
         file,
         object,
         params,
         bounds,
+        fields,
         received,
     })?;
     let wait = v

@@ -14,11 +14,13 @@
 use crate::engine::{self, Diag, Loaded, MeshData};
 use crate::error::StudioError;
 use crate::hints;
+use crate::parts::{Bound, Parts};
 use crate::wire;
-use microfrep_core::Shape;
+use microfrep_core::{Field, Shape};
 use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -132,8 +134,13 @@ pub struct Edit {
     /// `a[1..]` values; a missing or `None` entry takes the comment's
     /// default (else 0).
     pub params: Option<Vec<Option<f64>>>,
-    /// Box to work in; `None` uses the comment hint, else proven bounds.
+    /// Box to work in; `None` uses the comment hint, else the bound parts'
+    /// box where intervals prove the model inside it, else proven bounds.
     pub bounds: Option<[[f64; 3]; 2]>,
+    /// Data fields to bind as `(NAME, SOURCE)`, besides (and before) the
+    /// comments' `--field NAME=SOURCE`; sources are relative to the working
+    /// directory.
+    pub fields: Vec<(String, String)>,
     /// When the server received it.
     pub received: Instant,
 }
@@ -172,6 +179,7 @@ struct Current {
     params: Vec<Param>,
     bounds: Option<[[f64; 3]; 2]>,
     bounds_source: &'static str,
+    parts: Vec<Bound>,
     warnings: Vec<String>,
     meshes: Vec<Arc<MeshLevel>>,
     analysis: Vec<(&'static str, usize, Value)>,
@@ -197,6 +205,7 @@ pub struct Session {
     state: Mutex<State>,
     cond: Condvar,
     cfg: Arc<Config>,
+    parts: Arc<Parts>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -221,8 +230,9 @@ pub struct Snapshot {
 }
 
 impl Session {
-    fn new(id: String, cfg: Arc<Config>) -> Session {
+    fn new(id: String, cfg: Arc<Config>, parts: Arc<Parts>) -> Session {
         Session {
+            parts,
             id,
             gen: Arc::new(AtomicU64::new(0)),
             state: Mutex::new(State {
@@ -363,7 +373,62 @@ impl Session {
                 })
             })
             .collect();
-        let loaded = engine::load(&edit.source, &edit.file, edit.object.as_deref(), &params);
+        // Data fields the model calls by name: the edit's, then the
+        // comments' (built once per server; see `parts`).
+        let mut specs = edit.fields.clone();
+        for (n, s) in hints::field_hints(&edit.source) {
+            if !specs.iter().any(|(m, _)| m.eq_ignore_ascii_case(&n)) {
+                specs.push((n, s));
+            }
+        }
+        let mut bound: Vec<Bound> = Vec::new();
+        if !specs.is_empty() {
+            self.publish(gen, |c| c.stage = "reading parts".into());
+            for (name, spec) in &specs {
+                let shown = AtomicU64::new(u64::MAX);
+                let progress = |stage: &str, done: u64, total: u64| {
+                    let pct = (100 * done).checked_div(total).unwrap_or(0).min(100);
+                    if shown.swap(pct, Ordering::Relaxed) != pct {
+                        self.publish(gen, |c| {
+                            c.stage = format!("building {name}={spec}: {stage} {pct} %")
+                        });
+                    }
+                };
+                match self.parts.get(name, spec, &progress) {
+                    Ok(b) => bound.push(b),
+                    Err(e) => {
+                        let msg = e.to_string();
+                        self.publish(gen, |c| {
+                            c.loaded = true;
+                            c.rendered = format!("{}: error: {msg}\n", edit.file);
+                            c.diags = vec![Diag {
+                                error: true,
+                                line: 0,
+                                col: 0,
+                                message: msg,
+                            }];
+                            c.stage = "errors".into();
+                            c.done = true;
+                        });
+                        return;
+                    }
+                }
+            }
+            let b2 = bound.clone();
+            self.publish(gen, |c| c.parts = b2);
+            self.elapsed(gen, "parts_s");
+        }
+        let fields: Vec<(String, Arc<dyn Field>)> = bound
+            .iter()
+            .map(|b| (b.name.clone(), b.part.field.clone()))
+            .collect();
+        let loaded = engine::load(
+            &edit.source,
+            &edit.file,
+            edit.object.as_deref(),
+            &params,
+            &fields,
+        );
         let Some(model) = loaded.model else {
             self.publish(gen, |c| {
                 c.loaded = true;
@@ -403,6 +468,8 @@ impl Session {
             (b, "page")
         } else if let Some(b) = hints::box_hint(&edit.source) {
             (b, "comment")
+        } else if let Some(b) = self.part_box(gen, &shape, &bound) {
+            (b, "part")
         } else {
             let g = Arc::new(self.guard(gen));
             let g2 = g.clone();
@@ -453,6 +520,13 @@ impl Session {
                 )
             })
             .collect();
+        let notes = bound.iter().flat_map(|b| {
+            b.part
+                .notes
+                .iter()
+                .map(move |n| format!("{}={}: {n}", b.name, b.spec))
+        });
+        let warnings: Vec<String> = notes.chain(warnings).collect();
         self.publish(gen, |c| c.warnings = warnings);
         let spp = probe.seconds_per_point;
         let threads = rayon::current_num_threads().max(1) as f64;
@@ -498,6 +572,27 @@ impl Session {
             c.stage = "done".into();
             c.done = true;
         });
+    }
+
+    /// The bound parts' box (their union, padded as proven bounds are),
+    /// when intervals prove the model empty outside it: a model cut to its
+    /// part gets its box at once instead of after a bounds search, which
+    /// costs a mesh field's distance queries by the hundred thousand.
+    fn part_box(&self, gen: u64, shape: &Shape, bound: &[Bound]) -> Option<[[f64; 3]; 2]> {
+        let first = bound.first()?;
+        let hull = bound[1..].iter().fold(first.part.bounds, |h, b| {
+            let p = b.part.bounds;
+            [
+                std::array::from_fn(|a| h[0][a].min(p[0][a])),
+                std::array::from_fn(|a| h[1][a].max(p[1][a])),
+            ]
+        });
+        let hint = pad(hull);
+        let g = self.guard(gen);
+        let r = guarded(&g, |check| {
+            Ok(engine::empty_outside(shape, hint, PART_BOX_EVALS, check))
+        });
+        matches!(r, Ok(true)).then_some(hint)
     }
 
     /// Mesh level `i` at `res` cells (`want` asked); false when the
@@ -848,6 +943,21 @@ impl Session {
                 })
             })
             .collect();
+        let parts: Vec<Value> = c
+            .parts
+            .iter()
+            .map(|b| {
+                json!({
+                    "name": b.name,
+                    "source": b.spec,
+                    "kind": b.part.kind,
+                    "bounds": b.part.bounds,
+                    "seconds": b.part.seconds,
+                    "cached": b.cached,
+                    "notes": b.part.notes,
+                })
+            })
+            .collect();
         let mut analysis = serde_json::Map::new();
         for (label, res, v) in &c.analysis {
             analysis.insert(label.to_string(), json!({ "resolution": res, "report": v }));
@@ -871,6 +981,7 @@ impl Session {
             "rendered": c.rendered,
             "warnings": c.warnings,
             "model": model,
+            "parts": parts,
             "meshes": meshes,
             "analysis": analysis,
             "timings": timings,
@@ -896,7 +1007,12 @@ pub struct Sessions {
     map: Mutex<HashMap<String, Arc<Session>>>,
     next: AtomicU64,
     cfg: Arc<Config>,
+    parts: Arc<Parts>,
 }
+
+/// Interval evaluations [`Session::part_box`] may spend before the
+/// bounds search takes over.
+const PART_BOX_EVALS: usize = 50_000;
 
 /// Parameters the page gets sliders for (the rest keep their values).
 pub const MAX_PARAMS: usize = 64;
@@ -905,12 +1021,14 @@ pub const MAX_PARAMS: usize = 64;
 const IDLE: Duration = Duration::from_secs(600);
 
 impl Sessions {
-    /// No sessions yet.
-    pub fn new(cfg: Config) -> Sessions {
+    /// No sessions yet; data fields are read from under `root`.
+    pub fn new(cfg: Config, root: PathBuf) -> Sessions {
+        let parts = Arc::new(Parts::new(root, cfg.memory_limit as u64));
         Sessions {
             map: Mutex::new(HashMap::new()),
             next: AtomicU64::new(1),
             cfg: Arc::new(cfg),
+            parts,
         }
     }
 
@@ -934,7 +1052,11 @@ impl Sessions {
         }
         let n = self.next.fetch_add(1, Ordering::SeqCst);
         let id = format!("s{n}");
-        let s = Arc::new(Session::new(id.clone(), self.cfg.clone()));
+        let s = Arc::new(Session::new(
+            id.clone(),
+            self.cfg.clone(),
+            self.parts.clone(),
+        ));
         map.insert(id, s.clone());
         Ok(s)
     }

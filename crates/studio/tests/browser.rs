@@ -442,6 +442,39 @@ fn studio_in_headless_chromium() {
     );
     let kept = b.eval("[studio.viewer.dist, studio.viewer.refits]");
     assert_eq!(kept, zoomed, "a 5 % edit undid the hand zoom");
+
+    // A mesh part bound by a comment: the femur, 470 mm long, after a ball
+    // 0.6 across; the view refits to it.
+    let femur = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/femur.stl");
+    if femur.is_file() {
+        std::fs::create_dir_all(root.join("parts")).unwrap();
+        std::fs::copy(&femur, root.join("parts/femur.stl")).unwrap();
+        let src = "-- load with --field part=parts/femur.stl\nmy_model(x[3], a[1]) {\n  my_model = part(x);\n}\n";
+        let gen = b.eval("studio.state.gen").as_u64().unwrap();
+        let refits = b.eval("studio.viewer.refits").as_u64().unwrap();
+        b.eval(&format!("studio.setSource({}); true", json!(src)));
+        b.wait_for(
+            &format!("studio.state.gen > {gen} && studio.state.done && studio.shown.gen === studio.state.gen && studio.shown.level === 1"),
+            "the femur part",
+            60,
+        );
+        let ok = b.eval("document.getElementById('diagnostics').textContent");
+        assert!(
+            ok.as_str()
+                .unwrap()
+                .contains("part = parts/femur.stl (mesh"),
+            "{ok}"
+        );
+        assert_eq!(b.eval("studio.state.model.bounds_source"), "part");
+        assert_eq!(b.eval("studio.viewer.refits"), refits + 1);
+        assert_eq!(b.eval("studio.viewer.lastRefit"), "size");
+        std::thread::sleep(Duration::from_millis(300));
+        let lit = b.eval("studio.viewer.pixelHash()")["lit"].as_f64().unwrap();
+        assert!(lit > 0.02 * l0, "the femur is hardly on screen: {lit}");
+        b.screenshot(&shots.join("07-femur.png"));
+    } else {
+        println!("no ../shared/meshes/femur.stl: the mesh-part step was skipped");
+    }
     println!("screenshots in {}", shots.display());
     drop(b);
     studio.stop();
