@@ -124,6 +124,31 @@ impl Subspace {
     pub fn material(&self) -> usize {
         self.material
     }
+
+    /// The composition `comp` (one fraction per material) with this
+    /// subspace laid over it: where the region is `>= 0` the graded
+    /// material takes [`Subspace::fraction`], the base material (the one
+    /// set by [`Subspace::with_base`], else `primary`) the rest and every
+    /// other material 0; elsewhere `comp` is kept. Materials beyond
+    /// `comp.len()` are ignored (check them with [`MaterialModel::push`]).
+    pub fn over(&self, comp: &[Expr], primary: usize) -> Vec<Expr> {
+        let base = self.base.unwrap_or(primary);
+        let phi = self.fraction();
+        let inside = self.region.ge(0.0);
+        comp.iter()
+            .enumerate()
+            .map(|(m, prior)| {
+                let here = if m == self.material {
+                    phi.clone()
+                } else if m == base {
+                    1.0 - &phi
+                } else {
+                    Expr::constant(0.0)
+                };
+                Expr::select(inside.clone(), here, prior.clone())
+            })
+            .collect()
+    }
 }
 
 /// A primary material and graded subspaces.
@@ -194,19 +219,7 @@ impl MaterialModel {
         let c = |v: bool| Expr::constant(if v { 1.0 } else { 0.0 });
         let mut comp: Vec<Expr> = (0..self.materials).map(|m| c(m == self.primary)).collect();
         for s in &self.subspaces {
-            let base = s.base.unwrap_or(self.primary);
-            let phi = s.fraction();
-            let inside = s.region.ge(0.0);
-            for (m, slot) in comp.iter_mut().enumerate() {
-                let here = if m == s.material {
-                    phi.clone()
-                } else if m == base {
-                    1.0 - &phi
-                } else {
-                    Expr::constant(0.0)
-                };
-                *slot = Expr::select(inside.clone(), here, slot.clone());
-            }
+            comp = s.over(&comp, self.primary);
         }
         let in_part = part.ge(0.0);
         comp.into_iter()

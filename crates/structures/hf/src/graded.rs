@@ -5,6 +5,7 @@
 use crate::args::{code, out, three, value, Built};
 use microfrep_core::Expr;
 use microfrep_graded::bezier::{tet_weight_count, BezierBox, BezierTet};
+use microfrep_graded::subspace::Subspace;
 use microfrep_graded::{depth, dmf, smooth};
 use microfrep_hyperfun::library::{Arg, Kind::*, Output, Registry};
 use std::sync::Arc;
@@ -126,6 +127,37 @@ fn bezier_tet(a: &[Arg]) -> Output {
     })
 }
 
+/// `mfSubspace(s, region, fraction, material, base)`: a material subspace
+/// (Park et al. Sec. 2.3, 3.1; `microfrep_graded::subspace::Subspace`) laid
+/// over the composition in the attribute array `s`. Where `region >= 0`,
+/// `s[material]` becomes `fraction` clamped to [0, 1], `s[base]` the rest
+/// and every other element 0; elsewhere `s` keeps its values. `material`
+/// and `base` are 1-based *constants*, different, within `s`. Returns 1.
+fn subspace(a: &[Arg]) -> Output {
+    out(|| -> Built {
+        let prior = a[0].array().to_vec();
+        let n = prior.len() as i64;
+        if n < 2 {
+            return Err(Output::error(format!(
+                "the material array s must have at least 2 elements \
+                 (one per material), not {n}"
+            )));
+        }
+        let material = code(&a[3], "material", 1, n)? as usize - 1;
+        let base = code(&a[4], "base", 1, n)? as usize - 1;
+        if material == base {
+            return Err(Output::error(format!(
+                "material and base are both {} (the base material takes \
+                 the rest of the graded one, so they must differ)",
+                material + 1
+            )));
+        }
+        let sub = Subspace::new(a[1].real(), Expr::xyz(), a[2].real(), material).with_base(base);
+        let comp = sub.over(&prior, base);
+        Ok(Output::writes(Expr::constant(1.0), vec![(0, comp)]))
+    })
+}
+
 pub(crate) fn register(r: &mut Registry) {
     r.register("mfbias", &[R, R], bias);
     r.register("mfgain", &[R, R], gain);
@@ -136,4 +168,5 @@ pub(crate) fn register(r: &mut Registry) {
     r.register("mfbezier3", &[A, A, R, R, R, A], bezier3);
     r.register("mfbezier3fit", &[A, A, R, R, R, A], bezier3_fit);
     r.register("mfbeziertet", &[A, A, R, A], bezier_tet);
+    r.register("mfsubspace", &[A, R, R, R, R], subspace);
 }
