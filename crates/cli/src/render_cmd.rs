@@ -4,7 +4,8 @@ use crate::common::{check_extension, frame, load_model, ModelArgs, RunArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use microfrep::render::{
-    cutaway, ray_cast, ray_cast_attribute, section, AttributeShading, Camera, Colormap, Plane, View,
+    cutaway, ray_cast, ray_cast_attribute, section_image, AttributeShading, Camera, Colormap,
+    Plane, SectionShading, View,
 };
 use std::path::PathBuf;
 
@@ -21,7 +22,9 @@ pub struct RenderArgs {
     /// iso, front, top or side.
     #[arg(long, default_value = "iso")]
     view: View,
-    /// A flat section image of the value on the plane x=V, y=V or z=V.
+    /// A flat section image on the plane x=V, y=V or z=V: the value, or
+    /// with --color-by K the attribute s[K] inside the part, through
+    /// --colormap, with a legend and a scale bar in model units.
     #[arg(long)]
     section: Option<Plane>,
     /// Remove the octant nearest the viewer to show the inside.
@@ -111,11 +114,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let (min, max) = (b.min, b.max);
     let colour = a.colour.get()?;
     let mut range = None;
+    let (mut scale_bar, mut pixel) = (None, None);
     let img = match a.section {
         Some(_) if a.cutaway => bail!("--section and --cutaway do not combine"),
-        Some(_) if colour.is_some() => {
-            bail!("--color-by shades the ray-cast surface; it does not combine with --section")
-        }
         Some(plane) => {
             let (lo, hi) = (min[plane.axis], max[plane.axis]);
             if !(lo..=hi).contains(&plane.value) {
@@ -126,7 +127,25 @@ pub fn run(a: RenderArgs) -> Result<()> {
                     hi
                 );
             }
-            section(&m.shape, plane, min, max, w, h)
+            let opts = match colour {
+                Some((channel, colormap, given)) => SectionShading {
+                    channel: Some(channel),
+                    colormap,
+                    range: given,
+                    legend: true,
+                },
+                None => SectionShading {
+                    channel: None,
+                    colormap: Colormap::Viridis,
+                    range: None,
+                    legend: true,
+                },
+            };
+            let out = section_image(&m.shape, plane, min, max, w, h, &opts)?;
+            range = Some(([out.scale.lo, out.scale.hi], out.bar));
+            scale_bar = out.scale_bar;
+            pixel = Some(out.pixel);
+            out.image
         }
         None => {
             let s = if a.cutaway {
@@ -156,6 +175,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
         if let Some((r, bar)) = range {
             j["colour_range"] = serde_json::json!(r);
             j["legend_bar"] = serde_json::json!(bar);
+        }
+        if let Some(p) = pixel {
+            j["pixel"] = serde_json::json!(p);
+        }
+        if let Some(b) = scale_bar {
+            j["scale_bar"] = serde_json::json!({
+                "length": b.length,
+                "pixels": [b.x, b.y, b.width, b.height],
+            });
         }
         println!("{j}");
     }

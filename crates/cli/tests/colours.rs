@@ -1,8 +1,10 @@
 //! `mesh --color-by` and `render --color-by`: vertex colours read back from
 //! PLY, OBJ and 3MF equal the colour map of the attribute at each vertex
 //! (a closed form, and the model's own f64 evaluation); a rendered ramp
-//! changes hue monotonically with a legend of the map's ends; STL, missing
-//! channels and --section are refused with clear messages.
+//! changes hue monotonically with a legend of the map's ends; a section
+//! coloured by a material split shows each colour on its side, with a
+//! legend and a scale bar of the length its pixel size gives; STL and
+//! missing channels are refused with clear messages.
 
 use microfrep::io::colormap::{Colormap, ColourScale};
 use std::path::{Path, PathBuf};
@@ -434,11 +436,104 @@ fn bad_requests_are_refused_with_the_reason() {
         "--bounds",
         BOX,
         "--color-by",
-        "1",
+        "3",
         "--section",
         "z=0",
     ]);
-    assert!(e.contains("--section"), "{e}");
+    assert!(e.contains("attribute 3 does not exist"), "{e}");
     // Nothing was written (the model file only).
     assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1);
+}
+
+/// The cube [-1, 1]^3 with s[1] = 1 for x < 0, else 0.
+const SPLIT: &str = "my_model(x[3], a[1], s[1]) {
+  array c[3];
+  c = [-1, -1, -1];
+  s[1] = 0;
+  if x[1] < 0 then
+    s[1] = 1;
+  endif;
+  my_model = hfBlock(x, c, 2, 2, 2);
+}
+";
+
+#[test]
+fn render_section_colours_the_material_with_a_legend_and_a_scale_bar() {
+    let d = dir("section");
+    let model = d.join("split.hf");
+    std::fs::write(&model, SPLIT).unwrap();
+    let out = d.join("s.png");
+    let j = ok(&[
+        "render",
+        model.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--bounds",
+        "-1,-1,-1,1,1,1",
+        "--section",
+        "z=0",
+        "--size",
+        "300x200",
+        "--color-by",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(range(&j), [0.0, 1.0]);
+    let px_size = j["pixel"].as_f64().unwrap();
+    // 300 x 200 less the legend strip (44) and the scale band (16): the
+    // 2 x 2 section fits 256 x 184 pixels.
+    assert!((px_size - 2.0 / 184.0).abs() < 1e-12, "{px_size}");
+    let img = microfrep_io::png::decode(&std::fs::read(&out).unwrap(), &out).unwrap();
+    let (w, h, px) = (img.width, img.height, img.data);
+    assert_eq!((w, h), (300, 200));
+    let pixel = |x: usize, y: usize| {
+        let k = 3 * (y * w + x);
+        [px[k], px[k + 1], px[k + 2]]
+    };
+    // The section is centred in the 256 pixels left of the legend: model x
+    // runs from column 36 to 220, x = 0 at column 128.
+    let (left, right) = (Colormap::Viridis.rgb(1.0), Colormap::Viridis.rgb(0.0));
+    for y in [20, 92, 170] {
+        for x in 40..216 {
+            let c = pixel(x, y);
+            if x + 1 < 128 {
+                assert_eq!(c, left, "({x}, {y})");
+            } else if x > 128 {
+                assert_eq!(c, right, "({x}, {y})");
+            } else {
+                assert!(c == left || c == right, "({x}, {y}): {c:?}");
+            }
+        }
+    }
+    // Legend: the map's ends at the ends of its bar.
+    let bar: Vec<usize> = j["legend_bar"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    assert!(bar[0] >= 256);
+    assert_eq!(
+        pixel(bar[0] + bar[2] / 2, bar[1]),
+        Colormap::Viridis.rgb(1.0)
+    );
+    assert_eq!(
+        pixel(bar[0] + bar[2] / 2, bar[1] + bar[3] - 1),
+        Colormap::Viridis.rgb(0.0)
+    );
+    // Scale bar: 0.5 model units, 46 pixels at 2/184 per pixel, in ink.
+    let sb = &j["scale_bar"];
+    assert_eq!(sb["length"].as_f64(), Some(0.5));
+    let p: Vec<usize> = sb["pixels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!(p[2], 46);
+    for y in p[1]..p[1] + p[3] {
+        let ink: Vec<usize> = (0..256).filter(|&x| pixel(x, y) == [30, 30, 30]).collect();
+        assert_eq!(ink.len(), 46, "row {y}");
+        assert_eq!(ink[0], p[0]);
+    }
 }

@@ -13,7 +13,8 @@ pub const MIN_WIDTH: usize = 96;
 pub const MIN_HEIGHT: usize = 48;
 /// Characters a label may take.
 const LABEL: usize = 9;
-const INK: [u8; 3] = [30, 30, 30];
+/// Colour of the labels and of a section's scale bar.
+pub const INK: [u8; 3] = [30, 30, 30];
 const FRAME: [u8; 3] = [90, 90, 90];
 
 /// Glyphs of 3 x 5 pixels, rows top first, 3 bits a row (high bit left).
@@ -38,11 +39,12 @@ fn glyph(c: char) -> Option<[u8; 5]> {
 }
 
 /// Pixels per font pixel for an image `height` high.
-fn text_scale(height: usize) -> usize {
+pub fn text_scale(height: usize) -> usize {
     (height / 200).clamp(1, 8)
 }
 
-fn margin(height: usize) -> usize {
+/// Margin around the legend's parts, in pixels, for an image `height` high.
+pub fn margin(height: usize) -> usize {
     2 * text_scale(height) + 2
 }
 
@@ -94,7 +96,7 @@ pub fn draw_text(img: &mut RgbImage, x: usize, y: usize, s: usize, text: &str) {
     }
 }
 
-fn fill(img: &mut RgbImage, x: usize, y: usize, w: usize, h: usize, c: [u8; 3]) {
+pub(crate) fn fill(img: &mut RgbImage, x: usize, y: usize, w: usize, h: usize, c: [u8; 3]) {
     for yy in y..(y + h).min(img.height) {
         for xx in x..(x + w).min(img.width) {
             let k = 3 * (yy * img.width + xx);

@@ -4,8 +4,10 @@
 //! [`ray_cast`] shades what a [`Camera`] sees of a model inside a box;
 //! [`ray_cast_attribute`] colours the same surface by an attribute channel
 //! through a [`Colormap`], with a [`legend`];
-//! [`cutaway`] opens the octant nearest the viewer first, and [`section()`]
-//! maps the model's value on a plane to colour. Images are [`RgbImage`]s,
+//! [`cutaway`] opens the octant nearest the viewer first, [`section()`]
+//! maps the model's value on a plane to colour, and [`section_image`]
+//! colours a plane by an attribute (the material) or the value, with a
+//! legend and a scale bar in model units. Images are [`RgbImage`]s,
 //! written with [`RgbImage::save_png`]. The same model, box and size give
 //! the same bytes on every run.
 //!
@@ -46,7 +48,7 @@ pub use camera::{Camera, View};
 pub use error::{RenderError, Result};
 pub use image::RgbImage;
 pub use microfrep_io::colormap::{Colormap, ColourScale};
-pub use section::{section, Plane};
+pub use section::{section, section_image, Plane, ScaleBar, SectionImage, SectionShading};
 pub use shade::{ray_cast, ray_cast_attribute, AttributeImage, AttributeShading};
 
 use microfrep_core::{Expr, Shape};
