@@ -13,7 +13,9 @@
 //! (as `microfrep fill` writes it) or the edit's `fields` binds a mesh,
 //! scan or CSV file under the working directory, built once per server and
 //! kept; a model that its part bounds takes the part's box without a bounds
-//! search, so a mesh part's first image comes as fast as a formula's.
+//! search, so a mesh part's first image comes as fast as a formula's. A
+//! large scan not built yet is meshed first from a coarse stand-in (averaged
+//! voxel blocks) while the full scan is built.
 //!
 //! Each tab is a session. An edit starts a new generation; a worker lowers
 //! it, finds the box, probes the evaluation cost, then meshes it from

@@ -10,6 +10,11 @@
 //! almost always need the same part; errors are kept too, until the file
 //! changes. At most [`MAX_PARTS`] parts are kept, the least recently used
 //! dropped first.
+//!
+//! A large scan that is not built yet first comes as a coarse stand-in
+//! ([`Parts::coarse_step`]: the scan averaged over blocks of `step`^3
+//! voxels, so its distance transform takes a fraction of the time) for the
+//! first image, while the full scan is built in the background.
 
 use crate::engine::{self, Part};
 use crate::error::StudioError;
@@ -22,6 +27,14 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 /// Built parts kept at once.
 pub const MAX_PARTS: usize = 4;
+
+/// Scans of more bytes than this come coarse first, unless already built
+/// or read with a `step` of their own.
+pub const COARSE_BYTES: u64 = 4 << 20;
+
+/// Bytes a coarse stand-in aims at: the step is the smallest power of two
+/// whose cube brings the file's bytes below this (at most 8).
+const COARSE_TARGET: u64 = 1 << 20;
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 struct Key {
@@ -57,6 +70,8 @@ pub(crate) struct Bound {
     pub part: Arc<Part>,
     /// Whether it was built before this edit asked for it.
     pub cached: bool,
+    /// The averaging step of a coarse stand-in (None: the part itself).
+    pub coarse: Option<usize>,
 }
 
 impl Parts {
@@ -69,6 +84,80 @@ impl Parts {
         }
     }
 
+    /// The source, its checked path and its cache key.
+    fn resolve(
+        &self,
+        name: &str,
+        spec: &str,
+    ) -> Result<(microfrep::load::Source, paths::Checked, Key), StudioError> {
+        let bad =
+            |e: &dyn std::fmt::Display| StudioError::Request(format!("field {name}={spec}: {e}"));
+        let src = microfrep::load::Source::parse(spec).map_err(|e| bad(&e))?;
+        let checked = paths::existing(&self.root, &src.path).map_err(|e| bad(&e))?;
+        let meta = std::fs::metadata(&checked.full).map_err(|e| bad(&e))?;
+        // A folder of slices: its files' sizes and latest change.
+        let (len, modified) = if meta.is_dir() {
+            let mut len = 0;
+            let mut latest = meta.modified().ok();
+            if let Ok(rd) = std::fs::read_dir(&checked.full) {
+                for m in rd.flatten().filter_map(|e| e.metadata().ok()) {
+                    len += m.len();
+                    latest = latest.max(m.modified().ok());
+                }
+            }
+            (len, latest)
+        } else {
+            (meta.len(), meta.modified().ok())
+        };
+        let key = Key {
+            path: checked.full.clone(),
+            options: format!("{:?}", src.options),
+            len,
+            modified,
+        };
+        Ok((src, checked, key))
+    }
+
+    /// The averaging step for a coarse stand-in of `spec`: for a scan of
+    /// more than [`COARSE_BYTES`] that is not built yet and has no `step`
+    /// of its own; None otherwise (or when `spec` is bad: [`Parts::get`]
+    /// then says why).
+    pub(crate) fn coarse_step(&self, name: &str, spec: &str) -> Option<usize> {
+        use microfrep::load::{kind_of, SourceKind};
+        let (src, checked, key) = self.resolve(name, spec).ok()?;
+        let scan = kind_of(&checked.full) == Some(SourceKind::Scan);
+        if !scan || src.options.contains_key("step") || key.len <= COARSE_BYTES {
+            return None;
+        }
+        let map = self.map.lock().unwrap_or_else(|e| e.into_inner());
+        if map.get(&key).is_some_and(|e| e.cell.get().is_some()) {
+            return None;
+        }
+        let mut step: u64 = 2;
+        while step < 8 && key.len / (step * step * step) > COARSE_TARGET {
+            step *= 2;
+        }
+        Some(step as usize)
+    }
+
+    /// The coarse stand-in of `spec` at `step` (see [`Parts::coarse_step`]).
+    pub(crate) fn get_coarse(
+        &self,
+        name: &str,
+        spec: &str,
+        step: usize,
+        progress: &(dyn Fn(&str, u64, u64) + Sync),
+    ) -> Result<Bound, StudioError> {
+        let with = match spec.rsplit_once(':') {
+            Some((p, o)) if o.contains('=') && !p.is_empty() => format!("{spec},step={step}"),
+            _ => format!("{spec}:step={step}"),
+        };
+        let mut b = self.get(name, &with, progress)?;
+        b.spec = spec.to_string();
+        b.coarse = Some(step);
+        Ok(b)
+    }
+
     /// The field of `spec` (`PATH[:key=value,...]`, the path relative to
     /// the working directory), built now or earlier; `progress(stage,
     /// done, total)` hears about a build this call makes.
@@ -78,18 +167,7 @@ impl Parts {
         spec: &str,
         progress: &(dyn Fn(&str, u64, u64) + Sync),
     ) -> Result<Bound, StudioError> {
-        let src = microfrep::load::Source::parse(spec)
-            .map_err(|e| StudioError::Request(format!("field {name}={spec}: {e}")))?;
-        let checked = paths::existing(&self.root, &src.path)
-            .map_err(|e| StudioError::Request(format!("field {name}={spec}: {e}")))?;
-        let meta = std::fs::metadata(&checked.full)
-            .map_err(|e| StudioError::Request(format!("field {name}={spec}: {e}")))?;
-        let key = Key {
-            path: checked.full.clone(),
-            options: format!("{:?}", src.options),
-            len: meta.len(),
-            modified: meta.modified().ok(),
-        };
+        let (src, checked, key) = self.resolve(name, spec)?;
         let cell = {
             let mut map = self.map.lock().unwrap_or_else(|e| e.into_inner());
             let now = self.clock.fetch_add(1, Ordering::Relaxed);
@@ -129,6 +207,7 @@ impl Parts {
                 spec: spec.to_string(),
                 part: part.clone(),
                 cached,
+                coarse: None,
             }),
             Err(e) => Err(StudioError::Request(format!("field {name}={spec}: {e}"))),
         }

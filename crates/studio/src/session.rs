@@ -382,6 +382,8 @@ impl Session {
             }
         }
         let mut bound: Vec<Bound> = Vec::new();
+        let mut full: Vec<(usize, std::sync::mpsc::Receiver<Result<Bound, StudioError>>)> =
+            Vec::new();
         if !specs.is_empty() {
             self.publish(gen, |c| c.stage = "reading parts".into());
             for (name, spec) in &specs {
@@ -394,7 +396,30 @@ impl Session {
                         });
                     }
                 };
-                match self.parts.get(name, spec, &progress) {
+                // A large scan not built yet: a coarse stand-in now, the
+                // full scan on its own thread, taken after the first image.
+                let got = match self.parts.coarse_step(name, spec) {
+                    Some(step) => {
+                        let coarse = self.parts.get_coarse(name, spec, step, &progress);
+                        // Started once the stand-in is built, not to slow it.
+                        let (parts, n, sp) = (self.parts.clone(), name.clone(), spec.clone());
+                        let (tx, rx) = std::sync::mpsc::channel();
+                        let spawned = std::thread::Builder::new()
+                            .name("studio-part".into())
+                            .spawn(move || {
+                                let _ = tx.send(parts.get(&n, &sp, &|_, _, _| {}));
+                            });
+                        match (coarse, spawned) {
+                            (Ok(b), Ok(_)) => {
+                                full.push((bound.len(), rx));
+                                Ok(b)
+                            }
+                            _ => self.parts.get(name, spec, &progress),
+                        }
+                    }
+                    None => self.parts.get(name, spec, &progress),
+                };
+                match got {
                     Ok(b) => bound.push(b),
                     Err(e) => {
                         let msg = e.to_string();
@@ -463,25 +488,10 @@ impl Session {
         });
         self.elapsed(gen, "lowered_s");
 
-        // The box: the page's, the comment's, or what intervals prove.
-        let (bounds, source) = if let Some(b) = edit.bounds {
-            (b, "page")
-        } else if let Some(b) = hints::box_hint(&edit.source) {
-            (b, "comment")
-        } else if let Some(b) = self.part_box(gen, &shape, &bound) {
-            (b, "part")
-        } else {
-            let g = Arc::new(self.guard(gen));
-            let g2 = g.clone();
-            let check: Arc<dyn Fn() + Send + Sync> = Arc::new(move || g2.check());
-            let r = guarded(&g, |_| Ok(engine::prove_bounds(&shape, check)?));
-            match r {
-                Ok(b) => (pad(b), "proven"),
-                Err(e) => {
-                    self.fail(gen, e);
-                    return;
-                }
-            }
+        // The box: the page's, the comment's, the parts', or what
+        // intervals prove.
+        let Some((mut bounds, source)) = self.find_bounds(gen, &edit, &shape, &bound) else {
+            return;
         };
         if !(0..3).all(|a| bounds[0][a].is_finite() && bounds[1][a] > bounds[0][a]) {
             self.fail(
@@ -543,10 +553,33 @@ impl Session {
 
         let levels = self.cfg.levels.clone();
         let aff = &affordable;
-        let mesh_at =
-            |i: usize| self.mesh_level(gen, &shape, bounds, i, levels[i], aff(levels[i]), spp);
-        if !mesh_at(0) {
+        let mut shape = shape;
+        let mesh_at = |shape: &Shape, bounds, i: usize| {
+            self.mesh_level(gen, shape, bounds, i, levels[i], aff(levels[i]), spp)
+        };
+        if !mesh_at(&shape, bounds, 0) {
             return;
+        }
+        // Coarse stand-ins showed the first image: now the full parts.
+        if !full.is_empty() {
+            match self.full_parts(gen, &edit, &params, bound, full) {
+                Some((model, parts)) => {
+                    shape = model.shape.clone();
+                    if source == "part" {
+                        match self.find_bounds(gen, &edit, &shape, &parts) {
+                            Some((b, _)) => bounds = b,
+                            None => return,
+                        }
+                    }
+                    self.publish(gen, |c| {
+                        c.model = Some(model);
+                        c.parts = parts;
+                        c.bounds = Some(bounds);
+                    });
+                    self.elapsed(gen, "full_parts_s");
+                }
+                None => return,
+            }
         }
         if !self.analyse(gen, &shape, bounds, affordable(self.cfg.analysis[0]), 0) {
             return;
@@ -556,7 +589,7 @@ impl Session {
             return;
         }
         for i in 1..levels.len() {
-            if !mesh_at(i) {
+            if !mesh_at(&shape, bounds, i) {
                 return;
             }
             if i == 1 && !self.analyse(gen, &shape, bounds, affordable(self.cfg.analysis[1]), 1) {
@@ -572,6 +605,102 @@ impl Session {
             c.stage = "done".into();
             c.done = true;
         });
+    }
+
+    /// The box of generation `gen`: the edit's, a `Box` comment's, the
+    /// parts' ([`Session::part_box`]), else what intervals prove (padded);
+    /// None when the search failed (the failure is published).
+    fn find_bounds(
+        &self,
+        gen: u64,
+        edit: &Edit,
+        shape: &Shape,
+        bound: &[Bound],
+    ) -> Option<([[f64; 3]; 2], &'static str)> {
+        if let Some(b) = edit.bounds {
+            return Some((b, "page"));
+        }
+        if let Some(b) = hints::box_hint(&edit.source) {
+            return Some((b, "comment"));
+        }
+        if let Some(b) = self.part_box(gen, shape, bound) {
+            return Some((b, "part"));
+        }
+        let g = Arc::new(self.guard(gen));
+        let g2 = g.clone();
+        let check: Arc<dyn Fn() + Send + Sync> = Arc::new(move || g2.check());
+        match guarded(&g, |_| Ok(engine::prove_bounds(shape, check)?)) {
+            Ok(b) => Some((pad(b), "proven")),
+            Err(e) => {
+                self.fail(gen, e);
+                None
+            }
+        }
+    }
+
+    /// Waits for the full builds of parts that came as coarse stand-ins
+    /// (`full`: index into `bound`, and the build's reply) and lowers the
+    /// model again with them; None when the generation went stale or
+    /// failed (the failure is published).
+    fn full_parts(
+        &self,
+        gen: u64,
+        edit: &Edit,
+        params: &[f64],
+        mut bound: Vec<Bound>,
+        full: Vec<(usize, std::sync::mpsc::Receiver<Result<Bound, StudioError>>)>,
+    ) -> Option<(Loaded, Vec<Bound>)> {
+        for (i, rx) in full {
+            let what = format!("{}={}", bound[i].name, bound[i].spec);
+            self.publish(gen, |c| {
+                c.stage = format!("building {what} (the first image was of a coarse stand-in)")
+            });
+            let r = loop {
+                match rx.recv_timeout(Duration::from_millis(100)) {
+                    Ok(r) => break r,
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                        if self.gen.load(Ordering::SeqCst) != gen {
+                            // The build goes on and is kept for the next edit.
+                            return None;
+                        }
+                    }
+                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                        break Err(StudioError::Panic(format!("the build of {what} stopped")));
+                    }
+                }
+            };
+            match r {
+                Ok(b) => bound[i] = b,
+                Err(e) => {
+                    self.fail(gen, e);
+                    return None;
+                }
+            }
+        }
+        let fields: Vec<(String, Arc<dyn Field>)> = bound
+            .iter()
+            .map(|b| (b.name.clone(), b.part.field.clone()))
+            .collect();
+        let loaded = engine::load(
+            &edit.source,
+            &edit.file,
+            edit.object.as_deref(),
+            params,
+            &fields,
+        );
+        match loaded.model {
+            Some(m) => Some((m, bound)),
+            None => {
+                self.fail(
+                    gen,
+                    StudioError::Request(format!(
+                        "the model did not lower with the full parts: {}",
+                        loaded.rendered
+                    )),
+                );
+                None
+            }
+        }
     }
 
     /// The bound parts' box (their union, padded as proven bounds are),
@@ -954,6 +1083,7 @@ impl Session {
                     "bounds": b.part.bounds,
                     "seconds": b.part.seconds,
                     "cached": b.cached,
+                    "coarse_step": b.coarse,
                     "notes": b.part.notes,
                 })
             })

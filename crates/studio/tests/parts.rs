@@ -6,14 +6,18 @@
 //! and the time to the first image is printed next to a formula model's
 //! (the tori-ball block, as the `studio` bench suite uses).
 //!
-//! Run `cargo test --release -p microfrep-studio --test parts -- --nocapture`
-//! for the table. Skipped, with a message, where `../shared/meshes/` is
-//! absent.
+//! A large scan (a synthetic 256^3 NRRD, made here) comes first as a
+//! coarse stand-in, then the full scan.
+//!
+//! Run `cargo test --release -p microfrep-studio --test parts -- --nocapture
+//! --test-threads 1` for the table. The femur test is skipped, with a
+//! message, where `../shared/meshes/` is absent.
 
 use microfrep_studio::client::Client;
 use microfrep_studio::{wire, ServeOptions, Studio};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 fn femur() -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/femur.stl");
@@ -75,24 +79,42 @@ fn median(mut v: Vec<f64>) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
+/// Posts `src` and waits until its quick analysis is in (the worker then
+/// waits for the model to settle, so the next edit stops nothing); the
+/// first-image seconds.
+fn first_image(c: &Client, s: &str, src: &str) -> f64 {
+    let body = json!({"session": s, "source": src, "file": "m.hf", "wait_ms": 0});
+    let gen = post(c, body)["latest_gen"].as_u64().unwrap();
+    let mut since = 0;
+    loop {
+        let st = c
+            .get_json(&format!(
+                "/api/state?session={s}&since={since}&wait_ms=10000"
+            ))
+            .unwrap();
+        since = st["version"].as_u64().unwrap();
+        if st["gen"] == json!(gen) {
+            assert!(st["error"].is_null(), "{st}");
+            if st["timings"]["quick_analysis_s"].is_number() {
+                return st["timings"]["first_mesh_s"].as_f64().unwrap();
+            }
+        }
+    }
+}
+
 /// First-image seconds of a cold edit and the median of `n` warm ones (each
-/// edit changes a comment), with the last state.
+/// edit changes a comment), and the state of one more edit run to the end.
 fn first_images(c: &Client, src: &str, n: usize) -> (f64, f64, Value) {
     let s = c.post_json("/api/session", &json!({})).unwrap()["session"]
         .as_str()
         .unwrap()
         .to_string();
-    let st = run(c, &s, src, json!({}));
-    assert!(st["error"].is_null(), "{st}");
-    let cold = st["timings"]["first_mesh_s"].as_f64().unwrap();
-    let mut warm = Vec::new();
-    let mut last = st;
-    for k in 0..n {
-        let st = run(c, &s, &format!("{src}-- edit {k}\n"), json!({}));
-        assert!(st["error"].is_null(), "{st}");
-        warm.push(st["timings"]["first_mesh_s"].as_f64().unwrap());
-        last = st;
-    }
+    let cold = first_image(c, &s, src);
+    let warm: Vec<f64> = (0..n)
+        .map(|k| first_image(c, &s, &format!("{src}-- edit {k}\n")))
+        .collect();
+    let last = run(c, &s, &format!("{src}-- last\n"), json!({}));
+    assert!(last["error"].is_null(), "{last}");
     (cold, median(warm), last)
 }
 
@@ -124,10 +146,13 @@ fn mesh_parts_come_coarse_to_fine_as_fast_as_formulas() {
             }
         }
     }
-    // The studio's defaults: meshes at 48, 128, 192; analysis at 64, 128.
+    // The studio's defaults (meshes at 48, 128, 192; analysis at 64, 128),
+    // refinement a second after an edit, so that edits posted once the
+    // quick analysis is in stop no work.
     let studio = Studio::start(ServeOptions {
         port: 0,
         root: dir.clone(),
+        settle: Duration::from_secs(1),
         ..ServeOptions::default()
     })
     .unwrap();
@@ -183,7 +208,7 @@ fn mesh_parts_come_coarse_to_fine_as_fast_as_formulas() {
         "{vf} vs {femur_volume}"
     );
 
-    let (g_cold, g_warm, st) = first_images(&c, FEMUR_FILL, 2);
+    let (g_cold, g_warm, st) = first_images(&c, FEMUR_FILL, 3);
     assert_eq!(st["model"]["bounds_source"], "part");
     assert_eq!(st["parts"][0]["cached"], true);
 
@@ -193,7 +218,7 @@ fn mesh_parts_come_coarse_to_fine_as_fast_as_formulas() {
         "my_model = part(x);",
         "my_model = max(part(x), 20 - sqrt(x[1]^2 + x[2]^2 + (x[3] - 600)^2));",
     );
-    let (o_cold, _, st) = first_images(&c, &out, 0);
+    let (o_cold, o_warm, st) = first_images(&c, &out, 1);
     assert_eq!(st["model"]["bounds_source"], "proven", "{st}");
     let top = st["model"]["bounds"][1][2].as_f64().unwrap();
     assert!(top > 619.0 && top < 640.0, "{st}");
@@ -254,7 +279,9 @@ fn mesh_parts_come_coarse_to_fine_as_fast_as_formulas() {
     println!("| formula: tori-ball block (Box comment) | {f_cold:.3} | {f_warm:.3} |");
     println!("| femur.stl part alone | {p_cold:.3} | {p_warm:.3} |");
     println!("| femur.stl part, gyroid fill and skin | {g_cold:.3} | {g_warm:.3} |");
-    println!("| femur.stl part and a ball outside it (bounds searched) | {o_cold:.3} | |");
+    println!(
+        "| femur.stl part and a ball outside it (bounds searched) | {o_cold:.3} | {o_warm:.3} |"
+    );
     // The part's box spares the bounds search: a later edit of the femur
     // comes as fast as the formula's (generous margins for a shared
     // machine).
@@ -262,6 +289,110 @@ fn mesh_parts_come_coarse_to_fine_as_fast_as_formulas() {
         p_warm < 0.5 && p_warm < 3.0 * f_warm + 0.1,
         "{p_warm} vs {f_warm}"
     );
+    studio.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An NRRD scan of `n`^3 bytes: an ellipsoid of semi-axes 0.7 c, 0.7 c and
+/// 0.7 c / 1.2 voxels (c = (n - 1) / 2) about the centre, values falling
+/// through 128 at its surface; `spacing` mm a voxel. Returns its volume in
+/// mm^3.
+fn write_scan(path: &Path, n: usize, spacing: f64) -> f64 {
+    let c = (n - 1) as f64 / 2.0;
+    let mut data = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        let z = (k as f64 - c) / c * 1.2;
+        for j in 0..n {
+            let y = (j as f64 - c) / c;
+            for i in 0..n {
+                let x = (i as f64 - c) / c;
+                let r = (x * x + y * y + z * z).sqrt();
+                data.push((255.0 * (0.5 + (0.7 - r) * 8.0)).clamp(0.0, 255.0) as u8);
+            }
+        }
+    }
+    let head = format!(
+        "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {n} {n} {n}\nspacings: {spacing} {spacing} {spacing}\nencoding: raw\n\n"
+    );
+    let mut bytes = head.into_bytes();
+    bytes.extend_from_slice(&data);
+    std::fs::write(path, bytes).unwrap();
+    // 128 is crossed at r = 0.7 - 0.5 / (255 * 8) of the unit radius.
+    let r = (0.7 - 0.5 / 2040.0) * c * spacing;
+    4.0 / 3.0 * std::f64::consts::PI * r * r * r / 1.2
+}
+
+#[test]
+fn large_scans_come_coarse_first_then_full() {
+    let dir = std::env::temp_dir().join(format!("mf-studio-scan-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // 16 MiB: over the 4 MiB from which scans come coarse first.
+    let volume = write_scan(&dir.join("ct.nrrd"), 256, 0.4);
+    let studio = Studio::start(ServeOptions {
+        port: 0,
+        root: dir.clone(),
+        levels: vec![48, 96],
+        analysis: [48, 96],
+        ..ServeOptions::default()
+    })
+    .unwrap();
+    let c = Client::new(studio.addr());
+    let s = c.post_json("/api/session", &json!({})).unwrap()["session"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let src = "-- --field ct=ct.nrrd:iso=128\nmy_model(x[3], a[1]) {\n  my_model = ct(x);\n}\n";
+    let st = run(&c, &s, src, json!({}));
+    assert!(st["error"].is_null(), "{st}");
+    let t = &st["timings"];
+    let first = t["first_mesh_s"].as_f64().unwrap();
+    let full = t["full_parts_s"]
+        .as_f64()
+        .expect("the full scan came after");
+    assert!(first < full, "{t}");
+    // The state ends with the full scan.
+    assert_eq!(st["parts"][0]["coarse_step"], Value::Null, "{st}");
+    assert_eq!(st["parts"][0]["kind"], "scan");
+    assert_eq!(st["model"]["bounds_source"], "part");
+    let meshes = st["meshes"].as_array().unwrap();
+    assert_eq!(meshes.len(), 2);
+    let vol = |m: &Value| {
+        let blob = c.get(m["url"].as_str().unwrap()).unwrap();
+        let (pos, _, _, tris) = wire::decode_mesh(&blob.body).unwrap();
+        signed_volume(
+            tris.iter()
+                .map(|t| t.map(|i| pos[i as usize].map(f64::from))),
+        )
+    };
+    let (v0, v1) = (vol(&meshes[0]), vol(&meshes[1]));
+    // The first image, of the coarse stand-in, already has the shape.
+    assert!((v0 - volume).abs() < 0.05 * volume, "{v0} vs {volume}");
+    assert!((v1 - volume).abs() < 0.01 * volume, "{v1} vs {volume}");
+    let a = st["analysis"]["refined"]["report"]["volume"]["value"]
+        .as_f64()
+        .unwrap();
+    assert!((a - volume).abs() < 0.02 * volume, "{a} vs {volume}");
+    // The next edit has the full scan at once.
+    let st2 = run(&c, &s, &format!("{src}-- again\n"), json!({}));
+    assert_eq!(st2["parts"][0]["cached"], true);
+    assert!(st2["timings"]["full_parts_s"].is_null(), "{st2}");
+    let warm = st2["timings"]["first_mesh_s"].as_f64().unwrap();
+    println!(
+        "256^3 scan (16 MiB): first image {first:.3} s (coarse stand-in), full scan ready at \
+         {full:.3} s; next edit's first image {warm:.3} s"
+    );
+    // A small scan is built whole at once (2 MiB).
+    write_scan(&dir.join("small.nrrd"), 128, 0.8);
+    let st = run(
+        &c,
+        &s,
+        "-- --field ct=small.nrrd:iso=128\nmy_model(x[3], a[1]) {\n  my_model = ct(x);\n}\n",
+        json!({}),
+    );
+    assert!(st["error"].is_null(), "{st}");
+    assert!(st["timings"]["full_parts_s"].is_null(), "{st}");
+    assert_eq!(st["parts"][0]["cached"], false);
     studio.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
