@@ -257,7 +257,7 @@ pub fn fill(part: &Part, opts: &FillOptions, progress: Progress) -> Result<Fille
     check_options(part, opts)?;
     let b = part.bounds;
     let cap = depth_cap(part, opts);
-    let prepared = part.prepare(cap, opts.cell, progress)?;
+    let prepared = part.prepare(cap, depth_needed(part, opts), opts.cell, progress)?;
     let p = prepared.value.clone();
     let d = prepared.depth.clone();
     let skin_t = opts.skin;
@@ -381,6 +381,18 @@ fn depth_cap(part: &Part, opts: &FillOptions) -> f64 {
         Density::Constant(_) | Density::Field(_) => 2.0 * skin + opts.cell,
         Density::Graded { depth, .. } => 2.0 * (skin + depth) + opts.cell,
         Density::Expression(_) => diag,
+    }
+}
+
+/// How deep the model reads the depth's value (below that only "deeper"
+/// matters): the skin for a constant density, the skin and the grading
+/// ramp for a graded one, everywhere for an expression.
+fn depth_needed(part: &Part, opts: &FillOptions) -> f64 {
+    let skin = opts.skin.unwrap_or(0.0);
+    match &opts.density {
+        Density::Constant(_) | Density::Field(_) => skin,
+        Density::Graded { depth, .. } => skin + depth,
+        Density::Expression(_) => depth_cap(part, opts),
     }
 }
 

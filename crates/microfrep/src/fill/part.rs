@@ -109,18 +109,31 @@ impl Part {
     }
 
     /// The value and depth the fill evaluates: a distance part sampled on
-    /// a grid (clamped to a band `cap` plus a few steps around its
-    /// surface), any other part as it is with its estimated depth.
+    /// a grid (spacing from `cap`, clamped a few steps outside its surface
+    /// and a few steps below the depth `needed`), any other part as it is
+    /// with its depth estimated down to `cap`.
     pub(crate) fn prepare(
         &self,
         cap: f64,
+        needed: f64,
         cell: f64,
         progress: Progress,
     ) -> Result<Prepared, FillError> {
         if self.distance {
             let h = cache_spacing(cell, cap, &self.bounds);
-            let band = cap + 4.0 * h;
-            let cached = cache_field(self.shape.value(), &self.bounds, h, band, progress)?;
+            // Inside, the depth must be right down to the cap; outside only
+            // the sign matters (and a few steps of distance, for the
+            // mesher's and the skin measure's samples near the surface).
+            let band = needed.min(cap) + 4.0 * h;
+            let band_out = 4.0 * h;
+            let cached = cache_field(
+                self.shape.value(),
+                &self.bounds,
+                h,
+                band,
+                band_out,
+                progress,
+            )?;
             let value = Expr::field(cached.clone());
             return Ok(Prepared {
                 value: value.clone(),
@@ -259,13 +272,14 @@ fn cache_spacing(cell: f64, cap: f64, b: &Bounds) -> f64 {
 }
 
 /// The part's field sampled on a grid of step `h` over its box (padded by
-/// two steps), clamped to `[-band, band]`; bricks whose interval keeps
-/// `|f| >= band` are filled without sampling.
+/// two steps), clamped to `[-band_out, band]`; bricks whose interval keeps
+/// `f >= band` or `f <= -band_out` are filled without sampling.
 fn cache_field(
     f: &Expr,
     b: &Bounds,
     h: f64,
     band: f64,
+    band_out: f64,
     progress: Progress,
 ) -> Result<Arc<dyn Field>, FillError> {
     use microfrep_core::{BatchEval, GridField, Interval, IntervalEval, Tape};
@@ -275,7 +289,7 @@ fn cache_field(
         std::array::from_fn(|a| ((b.max[a] + 2.0 * h - lo[a]) / h).ceil() as usize + 1);
     let hi: [f64; 3] = std::array::from_fn(|a| lo[a] + (dims[a] - 1) as f64 * h);
     let tape = Tape::new(f);
-    const BR: usize = 16;
+    const BR: usize = 8;
     let nb: [usize; 3] = std::array::from_fn(|a| dims[a].div_ceil(BR));
     let total = nb[0] * nb[1] * nb[2];
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -302,8 +316,8 @@ fn cache_field(
                 if !r.may_be_nan() && r.lo >= band {
                     return (k, vec![band; count]);
                 }
-                if r.hi <= -band {
-                    return (k, vec![-band; count]);
+                if r.hi <= -band_out {
+                    return (k, vec![-band_out; count]);
                 }
                 let mut x = Vec::with_capacity(count);
                 let mut y = Vec::with_capacity(count);
@@ -323,9 +337,9 @@ fn cache_field(
                     .into_iter()
                     .map(|v| {
                         if v.is_nan() {
-                            -band
+                            -band_out
                         } else {
-                            (v as f64).clamp(-band, band)
+                            (v as f64).clamp(-band_out, band)
                         }
                     })
                     .collect();
