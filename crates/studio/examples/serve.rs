@@ -1,5 +1,5 @@
 //! Runs the studio until interrupted, as `microfrep serve` will:
-//! `cargo run --release -p microfrep-studio --example serve -- [MODEL.hf] [--port N] [--listen ADDR]`.
+//! `cargo run --release -p microfrep-studio --example serve -- [MODEL.hf] [--port N] [--listen ADDR] [--field NAME=FILE[:opts]]...`.
 
 use microfrep_studio::{serve, ServeOptions};
 
@@ -15,6 +15,10 @@ fn main() {
             "--listen" => match args.next().and_then(|p| p.parse().ok()) {
                 Some(ip) => opts.listen = ip,
                 None => fail("--listen needs an IP address"),
+            },
+            "--field" => match args.next().as_deref().and_then(|f| f.split_once('=')) {
+                Some((name, source)) => opts.fields.push((name.into(), source.into())),
+                None => fail("--field needs NAME=FILE[:opts]"),
             },
             m if !m.starts_with('-') => opts.model = Some(m.into()),
             other => fail(&format!("unknown option {other}")),

@@ -100,6 +100,12 @@ pub struct ServeOptions {
     pub settle: Duration,
     /// Most sessions (tabs) at once.
     pub max_sessions: usize,
+    /// Data fields bound for every model as `(NAME, SOURCE)`, the CLI's
+    /// `--field NAME=FILE[:opts]`: a mesh, scan or CSV file (relative to the
+    /// working directory, or absolute; unlike the page's and the models'
+    /// own bindings it may lie outside it). An edit's `fields` and a model's
+    /// `--field` comments bind other names; the edit's win, then these.
+    pub fields: Vec<(String, String)>,
 }
 
 impl Default for ServeOptions {
@@ -115,6 +121,7 @@ impl Default for ServeOptions {
             memory_limit: 0.0,
             settle: Duration::from_millis(300),
             max_sessions: 32,
+            fields: Vec::new(),
         }
     }
 }
@@ -164,6 +171,7 @@ impl Studio {
             settle: opts.settle,
             probe_seconds: 0.25,
             max_sessions: opts.max_sessions.max(1),
+            fields: opts.fields.clone(),
         };
         let want = SocketAddr::new(opts.listen, opts.port);
         let server = tiny_http::Server::http(want).map_err(|source| StudioError::Listen {

@@ -1,6 +1,8 @@
 //! Data fields that models bind by name (`--field NAME=SOURCE` in a
-//! comment, or the edit's `fields`): read from files under the working
-//! directory, built once and kept for every session of the server.
+//! comment, the edit's `fields`, or the server's own
+//! [`crate::ServeOptions::fields`]): read from files under the working
+//! directory (any file for the server's own), built once and kept for every
+//! session of the server.
 //!
 //! A part is keyed by its canonical path, its source options, and the
 //! file's size and modification time, so an edit of the model (every
@@ -89,11 +91,26 @@ impl Parts {
         &self,
         name: &str,
         spec: &str,
+        trusted: bool,
     ) -> Result<(microfrep::load::Source, paths::Checked, Key), StudioError> {
         let bad =
             |e: &dyn std::fmt::Display| StudioError::Request(format!("field {name}={spec}: {e}"));
         let src = microfrep::load::Source::parse(spec).map_err(|e| bad(&e))?;
-        let checked = paths::existing(&self.root, &src.path).map_err(|e| bad(&e))?;
+        // The server's own bindings (its operator's) may name any file;
+        // the page's and the models' stay under the working directory.
+        let checked = if trusted {
+            let full = self
+                .root
+                .join(&src.path)
+                .canonicalize()
+                .map_err(|e| bad(&e))?;
+            paths::Checked {
+                relative: src.path.clone(),
+                full,
+            }
+        } else {
+            paths::existing(&self.root, &src.path).map_err(|e| bad(&e))?
+        };
         let meta = std::fs::metadata(&checked.full).map_err(|e| bad(&e))?;
         // A folder of slices: its files' sizes and latest change.
         let (len, modified) = if meta.is_dir() {
@@ -122,9 +139,9 @@ impl Parts {
     /// more than [`COARSE_BYTES`] that is not built yet and has no `step`
     /// of its own; None otherwise (or when `spec` is bad: [`Parts::get`]
     /// then says why).
-    pub(crate) fn coarse_step(&self, name: &str, spec: &str) -> Option<usize> {
+    pub(crate) fn coarse_step(&self, name: &str, spec: &str, trusted: bool) -> Option<usize> {
         use microfrep::load::{kind_of, SourceKind};
-        let (src, checked, key) = self.resolve(name, spec).ok()?;
+        let (src, checked, key) = self.resolve(name, spec, trusted).ok()?;
         let scan = kind_of(&checked.full) == Some(SourceKind::Scan);
         if !scan || src.options.contains_key("step") || key.len <= COARSE_BYTES {
             return None;
@@ -145,6 +162,7 @@ impl Parts {
         &self,
         name: &str,
         spec: &str,
+        trusted: bool,
         step: usize,
         progress: &(dyn Fn(&str, u64, u64) + Sync),
     ) -> Result<Bound, StudioError> {
@@ -152,22 +170,24 @@ impl Parts {
             Some((p, o)) if o.contains('=') && !p.is_empty() => format!("{spec},step={step}"),
             _ => format!("{spec}:step={step}"),
         };
-        let mut b = self.get(name, &with, progress)?;
+        let mut b = self.get(name, &with, trusted, progress)?;
         b.spec = spec.to_string();
         b.coarse = Some(step);
         Ok(b)
     }
 
     /// The field of `spec` (`PATH[:key=value,...]`, the path relative to
-    /// the working directory), built now or earlier; `progress(stage,
-    /// done, total)` hears about a build this call makes.
+    /// the working directory, and inside it unless `trusted`), built now or
+    /// earlier; `progress(stage, done, total)` hears about a build this
+    /// call makes.
     pub(crate) fn get(
         &self,
         name: &str,
         spec: &str,
+        trusted: bool,
         progress: &(dyn Fn(&str, u64, u64) + Sync),
     ) -> Result<Bound, StudioError> {
-        let (src, checked, key) = self.resolve(name, spec)?;
+        let (src, checked, key) = self.resolve(name, spec, trusted)?;
         let cell = {
             let mut map = self.map.lock().unwrap_or_else(|e| e.into_inner());
             let now = self.clock.fetch_add(1, Ordering::Relaxed);

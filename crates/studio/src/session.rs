@@ -48,6 +48,9 @@ pub struct Config {
     pub probe_seconds: f64,
     /// Most sessions at once.
     pub max_sessions: usize,
+    /// Data fields bound for every model, `(NAME, SOURCE)`
+    /// ([`crate::ServeOptions::fields`]).
+    pub fields: Vec<(String, String)>,
 }
 
 /// The reason a guarded job stopped early (the unwind payload).
@@ -373,12 +376,19 @@ impl Session {
                 })
             })
             .collect();
-        // Data fields the model calls by name: the edit's, then the
-        // comments' (built once per server; see `parts`).
-        let mut specs = edit.fields.clone();
-        for (n, s) in hints::field_hints(&edit.source) {
-            if !specs.iter().any(|(m, _)| m.eq_ignore_ascii_case(&n)) {
-                specs.push((n, s));
+        // Data fields the model calls by name: the edit's, the server's,
+        // then the comments' (built once per server; see `parts`); the
+        // server's may lie outside the working directory.
+        let mut specs: Vec<(String, String, bool)> = Vec::new();
+        let given = edit.fields.iter().map(|(n, s)| (n, s, false));
+        let server = self.cfg.fields.iter().map(|(n, s)| (n, s, true));
+        let comments = hints::field_hints(&edit.source);
+        for (n, s, trusted) in given
+            .chain(server)
+            .chain(comments.iter().map(|(n, s)| (n, s, false)))
+        {
+            if !specs.iter().any(|(m, _, _)| m.eq_ignore_ascii_case(n)) {
+                specs.push((n.clone(), s.clone(), trusted));
             }
         }
         let mut bound: Vec<Bound> = Vec::new();
@@ -386,7 +396,8 @@ impl Session {
             Vec::new();
         if !specs.is_empty() {
             self.publish(gen, |c| c.stage = "reading parts".into());
-            for (name, spec) in &specs {
+            for (name, spec, trusted) in &specs {
+                let trusted = *trusted;
                 let shown = AtomicU64::new(u64::MAX);
                 let progress = |stage: &str, done: u64, total: u64| {
                     let pct = (100 * done).checked_div(total).unwrap_or(0).min(100);
@@ -398,26 +409,26 @@ impl Session {
                 };
                 // A large scan not built yet: a coarse stand-in now, the
                 // full scan on its own thread, taken after the first image.
-                let got = match self.parts.coarse_step(name, spec) {
+                let got = match self.parts.coarse_step(name, spec, trusted) {
                     Some(step) => {
-                        let coarse = self.parts.get_coarse(name, spec, step, &progress);
+                        let coarse = self.parts.get_coarse(name, spec, trusted, step, &progress);
                         // Started once the stand-in is built, not to slow it.
                         let (parts, n, sp) = (self.parts.clone(), name.clone(), spec.clone());
                         let (tx, rx) = std::sync::mpsc::channel();
                         let spawned = std::thread::Builder::new()
                             .name("studio-part".into())
                             .spawn(move || {
-                                let _ = tx.send(parts.get(&n, &sp, &|_, _, _| {}));
+                                let _ = tx.send(parts.get(&n, &sp, trusted, &|_, _, _| {}));
                             });
                         match (coarse, spawned) {
                             (Ok(b), Ok(_)) => {
                                 full.push((bound.len(), rx));
                                 Ok(b)
                             }
-                            _ => self.parts.get(name, spec, &progress),
+                            _ => self.parts.get(name, spec, trusted, &progress),
                         }
                     }
-                    None => self.parts.get(name, spec, &progress),
+                    None => self.parts.get(name, spec, trusted, &progress),
                 };
                 match got {
                     Ok(b) => bound.push(b),

@@ -394,5 +394,39 @@ fn large_scans_come_coarse_first_then_full() {
     assert!(st["timings"]["full_parts_s"].is_null(), "{st}");
     assert_eq!(st["parts"][0]["cached"], false);
     studio.stop();
+
+    // The server's own bindings (the CLI's `--field`) may name files outside
+    // the working directory; the page's may not.
+    let inner = dir.join("work");
+    std::fs::create_dir_all(&inner).unwrap();
+    let small = format!("{}:iso=128", dir.join("small.nrrd").display());
+    let studio = Studio::start(ServeOptions {
+        port: 0,
+        root: inner,
+        levels: vec![32],
+        analysis: [32, 32],
+        fields: vec![("ct".into(), small.clone())],
+        ..ServeOptions::default()
+    })
+    .unwrap();
+    let c = Client::new(studio.addr());
+    let s = c.post_json("/api/session", &json!({})).unwrap()["session"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let bare = "my_model(x[3], a[1]) {\n  my_model = ct(x);\n}\n";
+    let st = run(&c, &s, bare, json!({}));
+    assert!(st["error"].is_null(), "{st}");
+    assert_eq!(st["parts"][0]["source"], small);
+    assert_eq!(st["meshes"].as_array().unwrap().len(), 1);
+    let st = run(&c, &s, bare, json!({"fields": {"ct": small}}));
+    assert!(
+        st["rendered"]
+            .as_str()
+            .unwrap()
+            .contains("absolute paths are not allowed"),
+        "{st}"
+    );
+    studio.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
