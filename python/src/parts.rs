@@ -182,6 +182,9 @@ fn analysis_labels<'py>(
     d.set_item("kinds", l.kinds.into_pyarray(py))?;
     d.set_item("counts", l.counts.into_pyarray(py))?;
     d.set_item("flags", l.flags.into_pyarray(py))?;
+    d.set_item("extents", l.extents.into_pyarray(py))?;
+    d.set_item("region", l.region.to_vec())?;
+    d.set_item("spans", l.spans.into_pyarray(py))?;
     d.set_item("bottom", l.bottom.into_pyarray(py))?;
     d.set_item("top", l.top.into_pyarray(py))?;
     Ok(d)
@@ -236,6 +239,13 @@ fn slab_of(d: &Bound<'_, PyDict>) -> PyResult<SlabLabels> {
             .as_slice()?
             .to_vec(),
         flags: vec_u8("flags")?,
+        extents: vec_u32("extents")?,
+        region: {
+            let r: Vec<u32> = get("region")?.extract()?;
+            r.try_into()
+                .map_err(|_| errors::input("slab labels: region needs 6 numbers"))?
+        },
+        spans: vec_u32("spans")?,
         bottom: vec_u32("bottom")?,
         top: vec_u32("top")?,
     })

@@ -35,8 +35,9 @@ pub struct Connectivity {
     pub closed_pores: usize,
     /// Volume of the closed cavities.
     pub closed_pore_volume: f64,
-    /// Whether one pore component touches both faces of the bounds normal
-    /// to x, y and z.
+    /// Whether one pore component reaches from one end of the analysed
+    /// voxels to the other along x, y and z: from the first to the last
+    /// layer of voxels inside the region (or of the grid, without one).
     pub percolates: [bool; 3],
     /// Euler characteristic of the solid (closed voxels): 1 for a ball,
     /// 0 for a solid torus, 2 for a hollow ball.
@@ -106,6 +107,8 @@ fn label(sampler: &Sampler, progress: Progress, limit: usize) -> Result<Connecti
         cur_lab: vec![NONE; layer],
         out: Connectivity::default(),
         euler8: 0,
+        region: NO_EXTENT,
+        spans: Vec::new(),
     };
     let table = euler_table();
     let mut k0 = 0;
@@ -130,6 +133,7 @@ fn label(sampler: &Sampler, progress: Progress, limit: usize) -> Result<Connecti
     let empty = vec![OUTSIDE; layer];
     st.euler8 += euler_layer(&table, &st.prev_occ, &empty, nx, ny);
     st.compact(&mut []);
+    st.out.percolates = percolation(&st.region, &st.spans);
     let mut out = st.out;
     out.euler = st.euler8 / 8;
     out.solid_components = out.solid_volumes.len();
@@ -138,12 +142,48 @@ fn label(sampler: &Sampler, progress: Progress, limit: usize) -> Result<Connecti
     Ok(out)
 }
 
+/// Voxel index extents `[i min, i max, j min, j max, k min, k max]`.
+pub(crate) type Extent = [u32; 6];
+
+/// The extent of nothing (grows with [`grow`]).
+pub(crate) const NO_EXTENT: Extent = [u32::MAX, 0, u32::MAX, 0, u32::MAX, 0];
+
+/// `e` grown to hold `o`.
+pub(crate) fn grow(e: &mut Extent, o: &Extent) {
+    for a in 0..3 {
+        e[2 * a] = e[2 * a].min(o[2 * a]);
+        e[2 * a + 1] = e[2 * a + 1].max(o[2 * a + 1]);
+    }
+}
+
+/// Whether a pore of extent `e` could still span a region whose extent is
+/// now `region` along some axis (a region only grows, so a pore shorter
+/// than it along every axis never percolates).
+pub(crate) fn may_span(e: &Extent, region: &Extent) -> bool {
+    (0..3).any(|a| {
+        e[2 * a] <= region[2 * a] && e[2 * a + 1] >= region[2 * a + 1] && e[2 * a] <= e[2 * a + 1]
+    })
+}
+
+/// Percolation per axis: some pore of `spans` reaches both ends of the
+/// region's extent along it.
+pub(crate) fn percolation(region: &Extent, spans: &[Extent]) -> [bool; 3] {
+    std::array::from_fn(|a| {
+        region[2 * a] <= region[2 * a + 1]
+            && spans
+                .iter()
+                .any(|e| e[2 * a] == region[2 * a] && e[2 * a + 1] == region[2 * a + 1])
+    })
+}
+
 #[derive(Default)]
 pub(crate) struct Uf {
     pub(crate) parent: Vec<u32>,
     pub(crate) count: Vec<u64>,
     pub(crate) flags: Vec<u8>,
     pub(crate) kind: Vec<u8>,
+    /// Voxel extents of each component.
+    pub(crate) ext: Vec<Extent>,
 }
 
 impl Uf {
@@ -153,6 +193,7 @@ impl Uf {
         self.count.push(0);
         self.flags.push(0);
         self.kind.push(kind);
+        self.ext.push(NO_EXTENT);
         id
     }
 
@@ -174,6 +215,8 @@ impl Uf {
         self.parent[gone as usize] = keep;
         self.count[keep as usize] += self.count[gone as usize];
         self.flags[keep as usize] |= self.flags[gone as usize];
+        let g = self.ext[gone as usize];
+        grow(&mut self.ext[keep as usize], &g);
         keep
     }
 }
@@ -189,6 +232,11 @@ pub(crate) struct State {
     pub(crate) cur_lab: Vec<u32>,
     pub(crate) out: Connectivity,
     pub(crate) euler8: i64,
+    /// Extent of the voxels inside the region so far.
+    pub(crate) region: Extent,
+    /// Extents of the finished pore components that may still span the
+    /// region ([`may_span`]).
+    pub(crate) spans: Vec<Extent>,
 }
 
 impl State {
@@ -272,6 +320,9 @@ impl State {
                 let l = label as usize;
                 self.uf.count[l] += 1;
                 self.uf.flags[l] |= flags;
+                let at = [i as u32, i as u32, j as u32, j as u32, k as u32, k as u32];
+                grow(&mut self.uf.ext[l], &at);
+                grow(&mut self.region, &at);
                 self.cur_lab[v] = label;
             }
         }
@@ -292,6 +343,7 @@ impl State {
                 map[r] = next.make(self.uf.kind[r]);
                 next.count[map[r] as usize] = self.uf.count[r];
                 next.flags[map[r] as usize] = self.uf.flags[r];
+                next.ext[map[r] as usize] = self.uf.ext[r];
             }
             *l = map[r];
         }
@@ -313,10 +365,9 @@ impl State {
                     o.closed_pores += 1;
                     o.closed_pore_volume += vol;
                 }
-                for a in 0..3 {
-                    if flags >> (2 * a) & 3 == 3 {
-                        o.percolates[a] = true;
-                    }
+                let e = self.uf.ext[r];
+                if may_span(&e, &self.region) {
+                    self.spans.push(e);
                 }
             }
         }

@@ -60,7 +60,10 @@
 //! assert_eq!(c.euler, connectivity(&sampler, &|_, _| {}).unwrap().euler);
 //! ```
 
-use crate::connectivity::{euler_layer, euler_table, uf_limit, Connectivity, State, Uf, NONE, OUT};
+use crate::connectivity::{
+    euler_layer, euler_table, grow, percolation, uf_limit, Connectivity, Extent, State, Uf, NONE,
+    NO_EXTENT, OUT,
+};
 use crate::error::{AnalysisError, Result};
 use crate::grid::{Grid, Progress, Sampler, OUTSIDE, PORE, SLAB, SOLID};
 use crate::measure::{
@@ -282,6 +285,15 @@ pub struct SlabLabels {
     /// Flags of each boundary component: bits 0..6 faces x-, x+, y-, y+,
     /// z-, z+ of the grid, bit 6 next to a voxel outside the region.
     pub flags: Vec<u8>,
+    /// Voxel extents of each boundary component, six per component:
+    /// i min, i max, j min, j max, k min, k max.
+    pub extents: Vec<u32>,
+    /// Extent of the slab's voxels inside the region (as `extents`; an
+    /// empty extent has min > max).
+    pub region: [u32; 6],
+    /// Extents of the slab's finished pore components that may span the
+    /// whole region (six numbers each), for percolation.
+    pub spans: Vec<u32>,
     /// Boundary component of each voxel of layer `k0` (`u32::MAX`: none),
     /// x fastest; empty when `k0 == 0`.
     pub bottom: Vec<u32>,
@@ -323,6 +335,8 @@ pub fn label_slab(
         cur_lab: vec![NONE; layer],
         out: Connectivity::default(),
         euler8: 0,
+        region: NO_EXTENT,
+        spans: Vec::new(),
     };
     let table = euler_table();
     let limit = uf_limit(layer);
@@ -383,6 +397,9 @@ pub fn label_slab(
         kinds: std::mem::take(&mut st.uf.kind),
         counts: std::mem::take(&mut st.uf.count),
         flags: std::mem::take(&mut st.uf.flags),
+        extents: st.uf.ext.iter().flatten().copied().collect(),
+        region: st.region,
+        spans: st.spans.iter().flatten().copied().collect(),
         bottom,
         top,
     })
@@ -410,6 +427,8 @@ pub fn merge_labels(grid: &Grid, slabs: &[SlabLabels]) -> Result<Connectivity> {
         };
         if s.counts.len() != n
             || s.flags.len() != n
+            || s.extents.len() != 6 * n
+            || s.spans.len() % 6 != 0
             || !plane_ok(&s.bottom, s.k0 > 0)
             || !plane_ok(&s.top, s.k1 < nz)
         {
@@ -427,13 +446,19 @@ pub fn merge_labels(grid: &Grid, slabs: &[SlabLabels]) -> Result<Connectivity> {
     }
     let mut uf = Uf::default();
     let mut offset = Vec::with_capacity(order.len());
+    let mut region = NO_EXTENT;
+    let mut spans: Vec<Extent> = Vec::new();
+    let ext = |v: &[u32]| -> Extent { std::array::from_fn(|q| v[q]) };
     for s in &order {
         offset.push(uf.parent.len() as u32);
         for i in 0..s.kinds.len() {
             let id = uf.make(s.kinds[i]) as usize;
             uf.count[id] = s.counts[i];
             uf.flags[id] = s.flags[i];
+            uf.ext[id] = ext(&s.extents[6 * i..6 * i + 6]);
         }
+        grow(&mut region, &s.region);
+        spans.extend(s.spans.chunks_exact(6).map(ext));
     }
     for w in 0..order.len().saturating_sub(1) {
         let (a, b) = (order[w], order[w + 1]);
@@ -475,9 +500,13 @@ pub fn merge_labels(grid: &Grid, slabs: &[SlabLabels]) -> Result<Connectivity> {
         cur_lab: Vec::new(),
         out: Connectivity::default(),
         euler8: 0,
+        region,
+        spans,
     };
     st.compact(&mut []);
+    let percolates = percolation(&st.region, &st.spans);
     let mut out = st.out;
+    out.percolates = percolates;
     let mut euler8 = 0;
     for s in &order {
         let c = &s.inner;
@@ -487,9 +516,6 @@ pub fn merge_labels(grid: &Grid, slabs: &[SlabLabels]) -> Result<Connectivity> {
         out.open_pore_volume += c.open_pore_volume;
         out.closed_pores += c.closed_pores;
         out.closed_pore_volume += c.closed_pore_volume;
-        for a in 0..3 {
-            out.percolates[a] |= c.percolates[a];
-        }
         euler8 += s.euler8;
     }
     out.euler = euler8 / 8;

@@ -40,6 +40,7 @@ pub fn to_json(r: &Report, model: &str, region: Option<&str>) -> Value {
             "closed_pores": c.closed_pores,
             "closed_pore_volume": c.closed_pore_volume,
             "percolates": { "x": c.percolates[0], "y": c.percolates[1], "z": c.percolates[2] },
+            "percolation_between": if region.is_some() { "the region's first and last voxel layers" } else { "the box's faces" },
             "euler_solid": c.euler,
             "euler_surface": c.surface_euler(),
         })
@@ -181,8 +182,13 @@ pub fn to_text(r: &Report, model: &str, region: Option<&str>) -> String {
             s(c.closed_pore_volume)
         );
         let yn = |b: bool| if b { "yes" } else { "no" };
+        let ends = if region.is_some() {
+            "one pore from the first to the last voxel layer of the region"
+        } else {
+            "one pore from face to face of the box"
+        };
         println!(
-            "  percolation x {}, y {}, z {}",
+            "  percolation x {}, y {}, z {} ({ends})",
             yn(c.percolates[0]),
             yn(c.percolates[1]),
             yn(c.percolates[2])

@@ -113,3 +113,33 @@ fn rod_lattice_pores_percolate_on_all_axes() {
     // and 12 edges (rod ends at the faces do not count): V - E = -4.
     assert_eq!(c.euler, -4);
 }
+
+/// Percolation inside a region is judged between the region's own first
+/// and last voxel layers: a cube of interconnected pores percolates on
+/// every axis whether the analysis box is the cube or padded around it;
+/// pores sealed by a skin do not.
+#[test]
+fn percolation_in_a_region_is_the_same_for_a_padded_and_an_exact_box() {
+    let p = Expr::xyz();
+    let pi = std::f64::consts::PI;
+    let lat = rod_lattice(&p, &Slabs::uniform(2.0 * pi, 0.3), 1.0);
+    // The region: the cube [0, 2]^3.
+    let cube = microfrep_shapes::block(&p, &v3([0.0; 3]), &v3([2.0; 3]));
+    let exact = run(&lat, Some(&cube), [[0.0; 3], [2.0; 3]], 64);
+    for pad in [0.2f64, 0.37] {
+        let b = [[-pad; 3], [2.0 + pad; 3]];
+        let n = (64.0 * (2.0 + 2.0 * pad) / 2.0).round() as usize;
+        let padded = run(&lat, Some(&cube), b, n);
+        assert_eq!(padded.percolates, [true; 3], "pad {pad}");
+        assert_eq!(padded.percolates, exact.percolates, "pad {pad}");
+    }
+    assert_eq!(exact.percolates, [true; 3]);
+    // A solid skin around the pores: still percolating inside the region
+    // only where a pore runs end to end, which a skin stops (the region's
+    // extreme layers are solid).
+    let inner = microfrep_shapes::block(&p, &v3([0.1; 3]), &v3([1.8; 3]));
+    let skinned = union(&subtraction(&cube, &inner, 1.0), &lat, 1.0);
+    let c = run(&skinned, Some(&cube), [[-0.2; 3], [2.2; 3]], 77);
+    assert_eq!(c.percolates, [false; 3]);
+    assert_eq!(c.closed_pores, 1);
+}
