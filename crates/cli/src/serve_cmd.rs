@@ -19,6 +19,11 @@ pub struct ServeArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// A mesh, scan or CSV bound as the HyperFun function NAME(x) in every
+    /// model the studio opens: NAME=FILE[:key=value,...] (repeatable; a
+    /// model's own `--field` comment or the page's binding wins).
+    #[arg(long = "field", value_parser = crate::common::parse_field)]
+    fields: Vec<(String, String)>,
 }
 
 pub fn run(a: ServeArgs) -> Result<()> {
@@ -33,6 +38,7 @@ pub fn run(a: ServeArgs) -> Result<()> {
         port: a.port,
         model: a.model,
         root: ".".into(),
+        fields: a.fields,
         ..Default::default()
     };
     microfrep_studio::serve(opts)?;
