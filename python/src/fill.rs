@@ -24,11 +24,26 @@ pub struct PyFilled {
 /// A fill error as the package's exceptions: loading errors as
 /// `LoadError`, options out of range as `InputError`, a structure that
 /// cannot be built as `StructureError`.
+/// An option of the fill as `mf.fill` spells it.
+fn python_option(name: &str) -> String {
+    match name {
+        "shell" => "skin=".into(),
+        "density-grade" => "grade=".into(),
+        "density-expr" => "density= (an expression text)".into(),
+        "sheet" => "solid='sheet'".into(),
+        n => format!("{}=", n.replace('-', "_")),
+    }
+}
+
 fn fill_error(py: Python<'_>, e: FillError, part: &str) -> PyErr {
     match e {
         FillError::Load(l) => errors::load(py, l, part, None),
-        FillError::Option(m) => errors::input(format!("fill: {m}")),
-        FillError::Build(m) => errors::structure_msg(format!("fill: {m}")),
+        e @ FillError::Option(_) => {
+            errors::input(format!("fill: {}", e.message_with(&python_option)))
+        }
+        e @ FillError::Build(_) => {
+            errors::structure_msg(format!("fill: {}", e.message_with(&python_option)))
+        }
     }
 }
 
@@ -177,7 +192,11 @@ impl PyFilled {
     /// Warnings of the part and the fill.
     #[getter]
     fn notes(&self) -> Vec<String> {
-        self.f.notes.clone()
+        self.f
+            .notes
+            .iter()
+            .map(|n| microfrep::fill::with_option_names(n, &python_option))
+            .collect()
     }
     /// The structure's name as the CLI prints it.
     #[getter]

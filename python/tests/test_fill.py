@@ -228,8 +228,12 @@ def test_fill_errors_are_the_packages(sphere_hf):
         mf.fill(part, "foam", CELL, 0.3)
     with pytest.raises(mf.InputError, match="between 0 and 1"):
         mf.fill(part, "gyroid", CELL, 1.5)
-    with pytest.raises(mf.InputError, match="larger than the part"):
+    with pytest.raises(mf.InputError, match="larger than the part") as e:
         mf.fill(part, "gyroid", 50.0, 0.3)
+    # Options are named as Python spells them, not as the CLI does.
+    assert "cell= 50" in str(e.value) and "--" not in str(e.value), str(e.value)
+    with pytest.raises(mf.InputError, match="skin= 40 leaves no core"):
+        mf.fill(part, "gyroid", CELL, 0.3, skin=40.0)
     with pytest.raises(mf.InputError, match="no sheet form"):
         mf.fill(part, "octet", CELL, 0.3, solid="sheet")
     with pytest.raises(mf.InputError, match="give density or grade"):

@@ -150,7 +150,11 @@ fn density_of(a: &FillArgs) -> Result<Density> {
 pub fn run(a: FillArgs) -> Result<()> {
     a.run.init()?;
     let structure = Structure::parse(&a.structure, a.sheet).ok_or_else(|| {
-        anyhow::anyhow!("unknown structure '{}': {}", a.structure, Structure::NAMES)
+        anyhow::anyhow!(
+            "unknown structure '{}': {}",
+            a.structure,
+            microfrep::fill::with_option_names(Structure::NAMES, &microfrep::fill::cli_option)
+        )
     })?;
     if a.sheet && !matches!(structure, Structure::Tpms { .. }) {
         bail!("--sheet applies to TPMS structures only");
@@ -555,6 +559,7 @@ fn print_report(a: &FillArgs, f: &Filled, r: &FillReport, written: &serde_json::
         r.seconds
     );
     for n in f.notes.iter().chain(&r.notes) {
+        let n = microfrep::fill::with_option_names(n, &microfrep::fill::cli_option);
         println!("  note: {n}");
     }
 }

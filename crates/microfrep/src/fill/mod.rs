@@ -76,9 +76,10 @@ impl Structure {
         }
     }
 
-    /// The names [`Structure::parse`] takes.
+    /// The names [`Structure::parse`] takes (option names marked, see
+    /// [`with_option_names`]).
     pub const NAMES: &'static str = "gyroid, schwarz-p, schwarz-d, neovius, iwp, fks (TPMS; \
-        sheets with --sheet), sc, bcc, fcc, octet, kelvin, diamond (struts), rods, pores \
+        sheets with \u{27e8}sheet\u{27e9}), sc, bcc, fcc, octet, kelvin, diamond (struts), rods, pores \
         (spherical), irregular (Kou-Tan pores)";
 
     /// Every structure (TPMS as networks and as sheets), for test matrices.
@@ -189,11 +190,57 @@ pub enum FillError {
     #[error(transparent)]
     Load(#[from] LoadError),
     /// An option is out of range or does not fit the part or structure.
-    #[error("{0}")]
+    /// Option names in the text are marked `⟨name⟩` (see
+    /// [`with_option_names`]); the error prints them as the CLI spells
+    /// them (`--name`).
+    #[error("{}", with_option_names(.0, &cli_option))]
     Option(String),
     /// The structure could not be built.
-    #[error("{0}")]
+    #[error("{}", with_option_names(.0, &cli_option))]
     Build(String),
+}
+
+impl FillError {
+    /// The message with the option names as a front end spells them:
+    /// `name("cell")` gives `--cell` on the command line, `cell=` in
+    /// Python. Names are the CLI's without the dashes (`cell`, `shell`,
+    /// `seed`, `density`, `density-grade`, `density-expr`, `bounds`,
+    /// `sheet`, `resolution`).
+    pub fn message_with(&self, name: &dyn Fn(&str) -> String) -> String {
+        match self {
+            FillError::Option(m) | FillError::Build(m) => with_option_names(m, name),
+            e => e.to_string(),
+        }
+    }
+}
+
+/// The CLI's spelling of an option.
+pub fn cli_option(name: &str) -> String {
+    format!("--{name}")
+}
+
+/// `text` with every marked option name `⟨name⟩` spelled by `name` (a
+/// front end's spelling: [`cli_option`] for the command line). Messages
+/// and notes of the fill mark the options they advise.
+pub fn with_option_names(text: &str, name: &dyn Fn(&str) -> String) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(a) = rest.find('\u{27e8}') {
+        out.push_str(&rest[..a]);
+        let after = &rest[a + '\u{27e8}'.len_utf8()..];
+        match after.find('\u{27e9}') {
+            Some(b) => {
+                out.push_str(&name(&after[..b]));
+                rest = &after[b + '\u{27e9}'.len_utf8()..];
+            }
+            None => {
+                out.push_str(&rest[a..]);
+                rest = "";
+            }
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 fn bad(message: impl Into<String>) -> FillError {
@@ -349,7 +396,7 @@ pub fn fill(part: &Part, opts: &FillOptions, progress: Progress) -> Result<Fille
         if made < 8 {
             notes.push(format!(
                 "only {made} pore(s) fit the part: the density is a property of the cells, \
-                 not of the part; use a smaller --cell"
+                 not of the part; use a smaller ⟨cell⟩"
             ));
         }
     }
@@ -400,7 +447,7 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
     let c = opts.cell;
     if !(c.is_finite() && c > 0.0) {
         return Err(bad(format!(
-            "--cell {c} must be a positive size in millimetres"
+            "⟨cell⟩ {c} must be a positive size in millimetres"
         )));
     }
     let size = part.bounds.size();
@@ -408,38 +455,38 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
     let largest = size.iter().copied().fold(0.0, f64::max);
     if c > largest {
         return Err(bad(format!(
-            "--cell {c} is larger than the part ({:.4} x {:.4} x {:.4}): not one cell fits, so \
+            "⟨cell⟩ {c} is larger than the part ({:.4} x {:.4} x {:.4}): not one cell fits, so \
              the fill would be no structure; choose a cell below {largest:.4}",
             size[0], size[1], size[2]
         )));
     }
     if opts.structure == Structure::Irregular && c > smallest {
         return Err(bad(format!(
-            "--cell {c} is larger than the part's smallest side {smallest:.4}: irregular pores \
+            "⟨cell⟩ {c} is larger than the part's smallest side {smallest:.4}: irregular pores \
              need whole cells in the part; choose a cell below {smallest:.4}"
         )));
     }
     // Features below 1e-6 of the part are below what f32 batches resolve.
     if c < largest * 1e-5 {
         return Err(bad(format!(
-            "--cell {c} is too small for a part {largest:.4} long: more than 10^5 cells per \
+            "⟨cell⟩ {c} is too small for a part {largest:.4} long: more than 10^5 cells per \
              side; choose a cell of at least {:.3e}",
             largest * 1e-5
         )));
     }
     if let Some(t) = opts.skin {
         if !(t.is_finite() && t > 0.0) {
-            return Err(bad(format!("--shell {t} must be a positive thickness")));
+            return Err(bad(format!("⟨shell⟩ {t} must be a positive thickness")));
         }
         if 2.0 * t >= smallest {
             return Err(bad(format!(
-                "--shell {t} leaves no core: the part's smallest side is {smallest:.4}"
+                "⟨shell⟩ {t} leaves no core: the part's smallest side is {smallest:.4}"
             )));
         }
     }
     if opts.seed >= 1 << 53 {
         return Err(bad(format!(
-            "--seed {} is above 2^53 (seeds are exact in HyperFun's numbers up to 2^53)",
+            "⟨seed⟩ {} is above 2^53 (seeds are exact in HyperFun's numbers up to 2^53)",
             opts.seed
         )));
     }
@@ -453,22 +500,22 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
         }
     };
     match &opts.density {
-        Density::Constant(r) => unit("--density", *r)?,
+        Density::Constant(r) => unit("⟨density⟩", *r)?,
         Density::Graded {
             at_surface,
             at_depth,
             depth,
         } => {
-            unit("--density-grade surface density", *at_surface)?;
-            unit("--density-grade inner density", *at_depth)?;
+            unit("⟨density-grade⟩ surface density", *at_surface)?;
+            unit("⟨density-grade⟩ inner density", *at_depth)?;
             if !(depth.is_finite() && *depth > 0.0) {
                 return Err(bad(format!(
-                    "--density-grade depth {depth} must be positive"
+                    "⟨density-grade⟩ depth {depth} must be positive"
                 )));
             }
         }
         Density::Expression(e) if e.trim().is_empty() => {
-            return Err(bad("--density-expr is empty"));
+            return Err(bad("⟨density-expr⟩ is empty"));
         }
         _ => {}
     }
@@ -524,10 +571,10 @@ fn expression(text: &str, d: &Expr) -> Result<Expr, FillError> {
         fields: vec![("fill_depth".into(), mark.clone())],
     };
     let model =
-        microfrep_hyperfun::load_with_options(&src, "--density-expr", &opts).map_err(|e| {
+        microfrep_hyperfun::load_with_options(&src, "density expression", &opts).map_err(|e| {
             let col = (e.pos.col as usize).saturating_sub(prefix.len());
             bad(format!(
-                "--density-expr '{text}': {} (at column {})",
+                "⟨density-expr⟩ '{text}': {} (at column {})",
                 e.message,
                 col.max(1)
             ))
@@ -565,9 +612,9 @@ fn check_density_range(
         Structure::Rods | Structure::Irregular => (0.0, 1.0),
     };
     let what = match &opts.density {
-        Density::Constant(_) => "--density",
-        Density::Graded { .. } => "--density-grade",
-        Density::Expression(_) => "--density-expr",
+        Density::Constant(_) => "⟨density⟩",
+        Density::Graded { .. } => "⟨density-grade⟩",
+        Density::Expression(_) => "⟨density-expr⟩",
         Density::Field(_) => "the density field",
     };
     let hint = match opts.structure {
@@ -741,6 +788,42 @@ pub fn density_text(d: &Density) -> String {
 
 #[cfg(test)]
 mod tests {
+    /// Messages name options as the front end spells them: the CLI's
+    /// `--cell` by default, Python's `cell=` through `message_with`.
+    #[test]
+    fn errors_name_options_in_each_front_ends_spelling() {
+        let e = bad("\u{27e8}cell\u{27e9} 0 must be positive; try \u{27e8}density-grade\u{27e9}");
+        assert_eq!(
+            e.to_string(),
+            "--cell 0 must be positive; try --density-grade"
+        );
+        let py = |n: &str| format!("{}=", n.replace('-', "_"));
+        assert_eq!(
+            e.message_with(&py),
+            "cell= 0 must be positive; try density_grade="
+        );
+        // Unmarked text and a lone marker pass through.
+        assert_eq!(with_option_names("a \u{27e8}b", &cli_option), "a \u{27e8}b");
+        // No message of the fill spells a CLI option itself.
+        let src = include_str!("mod.rs");
+        let dashes = "-".repeat(2);
+        let needles: Vec<String> = ["cell", "shell", "density", "seed", "sheet", "bounds"]
+            .iter()
+            .map(|n| format!("{dashes}{n}"))
+            .collect();
+        for line in src.lines().filter(|l| !l.trim_start().starts_with("//")) {
+            if line.contains("assert") || line.contains("Made by") || line.contains("load with") {
+                continue;
+            }
+            for o in &needles {
+                assert!(
+                    !line.contains(o.as_str()),
+                    "an option spelled for the CLI: {line}"
+                );
+            }
+        }
+    }
+
     use super::*;
 
     #[test]

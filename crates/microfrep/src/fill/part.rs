@@ -84,8 +84,8 @@ impl Part {
             Some(b) => b,
             None => shape.bounds().map_err(|e| {
                 bad(format!(
-                    "cannot find the part's box ({e}); give it with --bounds \
-                     xmin,ymin,zmin,xmax,ymax,zmax"
+                    "cannot find the part's box ({e}); give it with \u{27e8}bounds\u{27e9} \
+                     (xmin, ymin, zmin, xmax, ymax, zmax)"
                 ))
             })?,
         };

@@ -854,7 +854,9 @@ impl FillReport {
                 "feature": self.feature,
                 "seconds": self.seconds,
             },
-            "notes": f.notes.iter().chain(&self.notes).collect::<Vec<_>>(),
+            "notes": f.notes.iter().chain(&self.notes)
+                .map(|n| super::with_option_names(n, &super::cli_option))
+                .collect::<Vec<_>>(),
         })
     }
 }
