@@ -33,6 +33,7 @@ mod arrays;
 mod errors;
 mod fab;
 mod fill;
+mod materials;
 mod model;
 mod parts;
 mod points;
@@ -111,5 +112,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     fab::register(m)?;
     parts::register(m)?;
     fill::register(m)?;
+    materials::register(m)?;
     Ok(())
 }

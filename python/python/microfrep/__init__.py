@@ -19,7 +19,8 @@ with R-function ``alpha``, blends, primitives (:func:`sphere`, :func:`box`,
 :func:`cylinder`, :func:`torus`, :func:`half_space`, :func:`ellipsoid`),
 TPMS (:func:`tpms`, :func:`gyroid`, ...), strut lattices (:func:`struts`,
 :func:`octet`, ...), irregular pores (:func:`pores`) and :func:`fill` (the
-CLI's fill, measured with :func:`fill_report`);
+CLI's fill, measured with :func:`fill_report`), graded materials
+(:func:`materials` with :class:`Subspace`, Park's material subspaces);
 expressions of :data:`x`, :data:`y`, :data:`z` for graded fields. Work:
 ``Shape.eval / eval_grid / gradient / attributes / mesh / mesh_to_file /
 slice / slice_to / render / analyze``; in Jupyter a shape shows a small
@@ -80,6 +81,7 @@ from ._model import (
     load,
     load_hyperfun,
     log,
+    materials,
     maximum,
     minimum,
     neovius,
@@ -96,6 +98,7 @@ from ._model import (
     sphere,
     sqrt,
     struts,
+    Subspace,
     subtraction,
     tan,
     tanh,

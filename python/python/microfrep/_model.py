@@ -754,6 +754,126 @@ def with_attribute(s: Shape, name: str, value: Field) -> Shape:
     return Shape(s._s.with_attribute(str(name), _expr(value)._e))
 
 
+# -- graded materials (Park et al.)
+
+
+class Subspace:
+    """A material subspace (Park, Crawford, Beaman, Sec. 2.3 and 3.1): a
+    graded region with its own local coordinates ``u, v, w``, holding the
+    fraction of one material written in those coordinates (``x``, ``y``,
+    ``z`` of ``fraction`` stand for ``u``, ``v``, ``w``), the rest of the
+    region being its ``base`` material (default: the model's primary).
+    Materials count from 1, like the attributes ``s1, s2, ...``.
+
+    ``Subspace(region, fraction, material, local=(x, y, z))`` is the
+    general form (``region >= 0`` inside, ``local`` three expressions of
+    the part point); :meth:`below_surface` and :meth:`in_box` are the
+    paper's two kinds. Combine them with :func:`materials`."""
+
+    def __init__(self, region: Field, fraction: Field, material: int, base: Optional[int] = None, local=None):
+        self._kind = "general"
+        self._args = (_expr(region), tuple(_expr(e) for e in (local or (x, y, z))))
+        if len(self._args[1]) != 3:
+            raise _core.InputError("Subspace: local must be three expressions (u, v, w)")
+        self._fraction = _expr(fraction)
+        self.material = _material_number(material, "material")
+        self.base = None if base is None else _material_number(base, "base")
+
+    @classmethod
+    def below_surface(
+        cls,
+        depth: Field,
+        depth_from: float,
+        depth_to: float,
+        fraction: Field,
+        material: int,
+        base: Optional[int] = None,
+        uv=None,
+    ) -> "Subspace":
+        """The layer below a reference surface from ``depth_from`` down
+        (``depth`` the depth below the surface, e.g. a distance), graded
+        over ``depth_from .. depth_to``: ``w = clamp((depth - depth_from) /
+        (depth_to - depth_from), 0, 1)``, ``u, v`` given by ``uv`` (default
+        the part's ``x, y``). Above ``depth_from`` is a shell of constant
+        depth of the base material."""
+        if not float(depth_to) > float(depth_from):
+            raise _core.InputError(f"Subspace.below_surface: depth_to {depth_to} must be greater than depth_from {depth_from}")
+        s = cls.__new__(cls)
+        s._kind = "depth"
+        uv = tuple(_expr(e) for e in (uv or (x, y)))
+        if len(uv) != 2:
+            raise _core.InputError("Subspace.below_surface: uv must be two expressions")
+        s._args = (_expr(depth), float(depth_from), float(depth_to) - float(depth_from), uv)
+        s._fraction = _expr(fraction)
+        s.material = _material_number(material, "material")
+        s.base = None if base is None else _material_number(base, "base")
+        return s
+
+    @classmethod
+    def in_box(cls, lo: Sequence[float], hi: Sequence[float], fraction: Field, material: int, base: Optional[int] = None) -> "Subspace":
+        """The box ``lo .. hi`` mapped to local coordinates ``[0, 1]^3`` (the
+        domain of a Bezier box field on the unit cube)."""
+        s = cls.__new__(cls)
+        s._kind = "box"
+        s._args = (_vec3(lo, "lo"), _vec3(hi, "hi"))
+        s._fraction = _expr(fraction)
+        s.material = _material_number(material, "material")
+        s.base = None if base is None else _material_number(base, "base")
+        return s
+
+    def __repr__(self):
+        return f"Subspace({self._kind}, material={self.material}, base={self.base})"
+
+    def _core(self) -> "_core.Subspace":
+        m = self.material - 1
+        b = None if self.base is None else self.base - 1
+        f = self._fraction._e
+        if self._kind == "general":
+            region, local = self._args
+            return _core.subspace(region._e, tuple(e._e for e in local), f, m, b)
+        if self._kind == "depth":
+            depth, start, ramp, uv = self._args
+            return _core.subspace_below_surface(depth._e, start, ramp, tuple(e._e for e in uv), f, m, b)
+        lo, hi = self._args
+        return _core.subspace_in_box(list(lo), list(hi), f, m, b)
+
+
+def _material_number(m, what: str) -> int:
+    if isinstance(m, bool) or not isinstance(m, (int, np.integer)) or m < 1:
+        raise _core.InputError(f"{what} must be a material number from 1, not {m!r}")
+    return int(m)
+
+
+@_recorded
+def materials(part: Shape, count: int, subspaces: Sequence[Subspace] = (), primary: int = 1) -> Shape:
+    """``part`` with one attribute per material, ``s1 .. s{count}``, its
+    volume fractions (Park's material model): material ``primary`` fills
+    the part and each :class:`Subspace` is laid over it in order, a later
+    one overriding an earlier one where they overlap. Inside the part the
+    fractions lie in [0, 1] and sum to 1; outside they are 0. Attributes
+    the part already has are kept, the new ones follow them."""
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or not 1 <= count <= 255:
+        raise _core.InputError(f"materials: count must be 1 to 255, not {count!r}")
+    primary = _material_number(primary, "primary")
+    if primary > count:
+        raise _core.InputError(f"materials: primary material {primary} is not one of 1..{count}")
+    subs = list(subspaces)
+    for i, sub in enumerate(subs):
+        if not isinstance(sub, Subspace):
+            raise _core.InputError(f"materials: subspace {i + 1} is a {type(sub).__name__}, not a Subspace")
+        for what, m in (("material", sub.material), ("base", sub.base)):
+            if m is not None and m > count:
+                raise _core.InputError(f"materials: subspace {i + 1}: {what} {m} is not one of 1..{count}")
+        if (sub.base or primary) == sub.material:
+            raise _core.InputError(f"materials: subspace {i + 1}: graded and base material are both {sub.material}")
+    part = _shape(part)
+    fr = _core.material_fractions(part._s.value, int(count), primary - 1, [s._core() for s in subs])
+    out = part._s
+    for k, e in enumerate(fr):
+        out = out.with_attribute(f"s{k + 1}", e)
+    return Shape(out)
+
+
 # -- loading
 
 
