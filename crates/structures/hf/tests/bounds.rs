@@ -25,12 +25,16 @@ const UNBOUNDED: &[&str] = &[
 /// that bounds each; its box is the block (20 wide, the solid 6.5 high).
 const LOOSE: &[&str] = &["fryazinov_fig8_morph_to_torus.hf"];
 
+/// Examples of a mesh part bound with `--field` (tested with the mesh in
+/// the facade's tests).
+const NEEDS_FIELDS: &[&str] = &["pasko_fig7_bone.hf"];
+
 #[test]
 fn bounded_examples_get_a_tight_box_fast() {
     let mut files: Vec<String> = std::fs::read_dir(examples_dir())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".hf"))
+        .filter(|n| n.ends_with(".hf") && !NEEDS_FIELDS.contains(&n.as_str()))
         .collect();
     files.sort();
     let mut checked = 0;
