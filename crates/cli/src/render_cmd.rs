@@ -43,22 +43,18 @@ pub struct ColourArgs {
     /// --colormap over --range.
     #[arg(long = "color-by", visible_alias = "colour-by", value_name = "K")]
     pub color_by: Option<usize>,
-    /// Colour map of --color-by: viridis or grey.
-    #[arg(
-        long,
-        value_name = "MAP",
-        default_value = "viridis",
-        requires = "color_by"
-    )]
-    pub colormap: Colormap,
+    /// Colour map of --color-by (and of a value --section): viridis
+    /// (default) or grey.
+    #[arg(long, value_name = "MAP")]
+    pub colormap: Option<Colormap>,
     /// Values of the map's first and last colour, LO,HI (default: the
     /// channel's smallest and largest value over the mesh's vertices or the
-    /// visible surface).
+    /// visible surface; for a value section, -M,M with M the largest
+    /// magnitude on it).
     #[arg(
         long,
         value_name = "LO,HI",
         value_parser = parse_range,
-        requires = "color_by",
         allow_hyphen_values = true
     )]
     pub range: Option<(f64, f64)>,
@@ -68,13 +64,33 @@ pub struct ColourArgs {
 pub type ColourRequest = (usize, Colormap, Option<[f64; 2]>);
 
 impl ColourArgs {
-    /// The request; `None` without --color-by.
+    /// The request; `None` without --color-by (then --colormap and
+    /// --range are refused: they colour by an attribute).
     pub fn get(&self) -> Result<Option<ColourRequest>> {
         match self.color_by {
+            None if self.colormap.is_some() || self.range.is_some() => {
+                bail!("--colormap and --range colour by an attribute: give --color-by K")
+            }
             None => Ok(None),
-            Some(0) => bail!("--color-by K: channels count from 1 (HyperFun's s[1])"),
-            Some(k) => Ok(Some((k - 1, self.colormap, self.range.map(|r| [r.0, r.1])))),
+            Some(_) => self
+                .section()
+                .map(|(k, map, range)| k.map(|k| (k, map, range))),
         }
+    }
+
+    /// A section's colouring: the channel (`None`: the value), the map and
+    /// the range, all optional.
+    pub fn section(&self) -> Result<(Option<usize>, Colormap, Option<[f64; 2]>)> {
+        let channel = match self.color_by {
+            None => None,
+            Some(0) => bail!("--color-by K: channels count from 1 (HyperFun's s[1])"),
+            Some(k) => Some(k - 1),
+        };
+        Ok((
+            channel,
+            self.colormap.unwrap_or(Colormap::Viridis),
+            self.range.map(|r| [r.0, r.1]),
+        ))
     }
 }
 
@@ -112,7 +128,10 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let m = load_model(&a.model, &a.run)?;
     let b = frame(&m, &a.model, &a.run)?;
     let (min, max) = (b.min, b.max);
-    let colour = a.colour.get()?;
+    let colour = match a.section {
+        Some(_) => None,
+        None => a.colour.get()?,
+    };
     let mut range = None;
     let (mut scale_bar, mut pixel) = (None, None);
     let img = match a.section {
@@ -127,19 +146,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
                     hi
                 );
             }
-            let opts = match colour {
-                Some((channel, colormap, given)) => SectionShading {
-                    channel: Some(channel),
-                    colormap,
-                    range: given,
-                    legend: true,
-                },
-                None => SectionShading {
-                    channel: None,
-                    colormap: Colormap::Viridis,
-                    range: None,
-                    legend: true,
-                },
+            let (channel, colormap, given) = a.colour.section()?;
+            let opts = SectionShading {
+                channel,
+                colormap,
+                range: given,
+                legend: true,
             };
             let out = section_image(&m.shape, plane, min, max, w, h, &opts)?;
             range = Some(([out.scale.lo, out.scale.hi], out.bar));

@@ -536,4 +536,31 @@ fn render_section_colours_the_material_with_a_legend_and_a_scale_bar() {
         assert_eq!(ink.len(), 46, "row {y}");
         assert_eq!(ink[0], p[0]);
     }
+    // Without --color-by the section shows the value, through --colormap
+    // over --range.
+    let j = ok(&[
+        "render",
+        model.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--bounds",
+        "-1,-1,-1,1,1,1",
+        "--section",
+        "z=0",
+        "--size",
+        "300x200",
+        "--colormap",
+        "grey",
+        "--range=-3,3",
+        "--json",
+    ]);
+    assert_eq!(range(&j), [-3.0, 3.0]);
+    let img = microfrep_io::png::decode(&std::fs::read(&out).unwrap(), &out).unwrap();
+    let k = 3 * (92 * 300 + 128);
+    let c = &img.data[k..k + 3];
+    assert!(
+        c[0] == c[1] && c[1] == c[2] && c[0] > 128,
+        "{c:?}: grey, above the middle"
+    );
+    assert!(j["scale_bar"]["length"].as_f64() == Some(0.5));
 }
