@@ -156,7 +156,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             let out = section_image(&m.shape, plane, min, max, w, h, &opts)?;
             range = Some(([out.scale.lo, out.scale.hi], out.bar));
             scale_bar = out.scale_bar;
-            pixel = Some(out.pixel);
+            pixel = Some((out.pixel, out.origin));
             out.image
         }
         None => {
@@ -188,8 +188,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
             j["colour_range"] = serde_json::json!(r);
             j["legend_bar"] = serde_json::json!(bar);
         }
-        if let Some(p) = pixel {
+        if let Some((p, origin)) = pixel {
             j["pixel"] = serde_json::json!(p);
+            j["origin"] = serde_json::json!(origin);
         }
         if let Some(b) = scale_bar {
             j["scale_bar"] = serde_json::json!({

@@ -564,3 +564,46 @@ fn render_section_colours_the_material_with_a_legend_and_a_scale_bar() {
     );
     assert!(j["scale_bar"]["length"].as_f64() == Some(0.5));
 }
+
+/// Park's Fig. 6 (written with mfSubspace) in section: titanium (s[2] = 1)
+/// deep in the stem, bioceramic (s[2] = 0) in the shell under its surface.
+#[test]
+fn render_section_of_the_femur_shows_its_material_subspace() {
+    let d = dir("femur");
+    let out = d.join("f.png");
+    let j = ok(&[
+        "render",
+        &example("park_fig6_femur_gradient.hf"),
+        "-o",
+        out.to_str().unwrap(),
+        "--section",
+        "z=0",
+        "--size",
+        "600x500",
+        "--color-by",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(range(&j), [0.0, 1.0]);
+    let px = j["pixel"].as_f64().unwrap();
+    let o: Vec<f64> = j["origin"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let img = microfrep_io::png::decode(&std::fs::read(&out).unwrap(), &out).unwrap();
+    let at = |x: f64, y: f64| {
+        let (c, r) = (((x - o[0]) / px) as usize, ((o[1] - y) / px) as usize);
+        let k = 3 * (r * img.width + c);
+        [img.data[k], img.data[k + 1], img.data[k + 2]]
+    };
+    // The stem at y = -1 has half-width 0.5 sqrt(1 - 1/7.5) = 0.465.
+    assert_eq!(at(0.0, -1.0), Colormap::Viridis.rgb(1.0));
+    assert_eq!(at(0.43, -1.0), Colormap::Viridis.rgb(0.0));
+    assert_eq!(at(-0.43, -1.0), Colormap::Viridis.rgb(0.0));
+    // The head's centre (0.6, 3.4), radius 0.75: titanium inside.
+    assert_eq!(at(0.6, 3.4), Colormap::Viridis.rgb(1.0));
+    // Outside: the background.
+    assert_eq!(at(1.0, -1.0), [250, 250, 250]);
+}
