@@ -152,9 +152,13 @@ def test_python_fill_equals_the_cli_on_a_mesh_part(tmp_path, sphere_stl, structu
     # most the interpolation error of the sample, away from pores that
     # depend on the part (irregular pores are rebuilt from the exact
     # distance, here to the same pores). Measured: at most 0.027 mm (a
-    # ninth of the grid step).
+    # ninth of the grid step). The sample is also clamped a few steps
+    # outside the surface and below the skin's depth, where only the sign
+    # matters: there the values differ, the solid does not.
     assert not np.isnan(a).any() and not np.isnan(b).any()
-    assert np.all(np.abs(a - b) <= 0.04), np.max(np.abs(a - b))
+    near = np.abs(b) < 0.5
+    assert near.mean() > 0.05
+    assert np.all(np.abs(a[near] - b[near]) <= 0.04), np.max(np.abs(a[near] - b[near]))
     sure = np.abs(a) > 0.04
     assert sure.mean() > 0.9 and np.array_equal(a[sure] >= 0, b[sure] >= 0)
     # Two loads of the .hf (the CLI's and Python's text) are one model.
