@@ -4,7 +4,12 @@
 
 (function () {
   const $ = (id) => document.getElementById(id);
-  const H = { "Content-Type": "application/json", "X-Studio": "1" };
+  // The studio's token comes in the page's address (`/?token=...`, as the
+  // server prints it) and goes with every request: as a header where the
+  // page fetches, in the query where the browser does (images, downloads).
+  const TOKEN = new URLSearchParams(location.search).get("token") || "";
+  const H = { "Content-Type": "application/json", "X-Studio": "1", "X-Studio-Token": TOKEN };
+  const withToken = (u) => u + (u.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN);
 
   const app = {
     ready: false,
@@ -47,7 +52,7 @@
   }
 
   async function api(path, body) {
-    const r = await fetch(path, body === undefined ? {} : { method: "POST", headers: H, body: JSON.stringify(body) });
+    const r = await fetch(path, body === undefined ? { headers: { "X-Studio-Token": TOKEN } } : { method: "POST", headers: H, body: JSON.stringify(body) });
     const ct = r.headers.get("Content-Type") || "";
     const v = ct.includes("json") ? await r.json() : await r.text();
     if (!r.ok) throw new Error((v && v.error) || v || r.statusText);
@@ -339,7 +344,7 @@
       return;
     }
     try {
-      const r = await fetch(best.url);
+      const r = await fetch(best.url, { headers: { "X-Studio-Token": TOKEN } });
       if (!r.ok) throw new Error(await r.text());
       const buf = await r.arrayBuffer();
       if (app.shown.gen !== want.gen || app.shown.level !== want.level) return;
@@ -357,7 +362,7 @@
     const img = $("fallback");
     const w = Math.min(1600, img.clientWidth || 800), h = Math.min(1200, img.clientHeight || 600);
     const view = app.fallbackView || "iso";
-    img.src = `/api/render.png?session=${app.session}&gen=${gen}&view=${view}&cutaway=${$("cutaway").checked ? 1 : 0}&w=${w}&h=${h}`;
+    img.src = withToken(`/api/render.png?session=${app.session}&gen=${gen}&view=${view}&cutaway=${$("cutaway").checked ? 1 : 0}&w=${w}&h=${h}`);
   }
 
   function row(name, value, err) {
@@ -476,7 +481,7 @@
       img.onload = () => {
         if (+$("sec-axis").value === a && Math.abs(sectionValue() - v) < 1e-12) viewer.setSectionImage(img, a, v);
       };
-      img.src = `/api/section.png?session=${app.session}&gen=${app.state.gen}&axis=${a}&value=${v}&w=${w}&h=${h}`;
+      img.src = withToken(`/api/section.png?session=${app.session}&gen=${app.state.gen}&axis=${a}&value=${v}&w=${w}&h=${h}`);
     }, 120);
   }
 
@@ -495,13 +500,13 @@
 
   $("exp-stl").addEventListener("click", () => {
     if (!app.state || !app.state.meshes.length) return msg("no mesh yet");
-    download(`/api/export.stl?session=${app.session}&gen=${app.state.gen}`);
+    download(withToken(`/api/export.stl?session=${app.session}&gen=${app.state.gen}`));
     msg("STL of the finest mesh so far");
   });
   $("exp-zip").addEventListener("click", () => {
     if (!app.state) return;
     const q = `layer=${encodeURIComponent($("sl-layer").value)}&pixel=${encodeURIComponent($("sl-pixel").value)}&format=${$("sl-format").value}`;
-    download(`/api/slices.zip?session=${app.session}&gen=${app.state.gen}&${q}`);
+    download(withToken(`/api/slices.zip?session=${app.session}&gen=${app.state.gen}&${q}`));
     msg("slicing… the download starts when the stack is made");
   });
   $("exp-dir").addEventListener("click", async () => {
@@ -576,6 +581,10 @@
   app.openModel = openModel;
 
   (async function boot() {
+    if (!TOKEN) {
+      setStatus("no token in the address: open the address microfrep serve printed (…/?token=…)", "bad");
+      return;
+    }
     try {
       const s = await api("/api/session", {});
       app.session = s.session;

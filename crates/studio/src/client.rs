@@ -41,6 +41,8 @@ pub struct Client {
     pub host: String,
     /// Read timeout per request.
     pub timeout: Duration,
+    /// The studio's token, sent as `X-Studio-Token` when set.
+    pub token: Option<String>,
 }
 
 impl Client {
@@ -50,11 +52,18 @@ impl Client {
             addr,
             host: format!("127.0.0.1:{}", addr.port()),
             timeout: Duration::from_secs(120),
+            token: None,
         }
     }
 
+    /// The same client, sending `token` with every request.
+    pub fn with_token(mut self, token: &str) -> Client {
+        self.token = Some(token.to_string());
+        self
+    }
+
     /// Sends a request; `body` with `Content-Type: application/json` when
-    /// given. `POST`s carry `X-Studio: 1`.
+    /// given. `POST`s carry `X-Studio: 1`, every request the token if set.
     pub fn request(
         &self,
         method: &str,
@@ -70,6 +79,9 @@ impl Client {
         );
         if method == "POST" {
             head += "X-Studio: 1\r\n";
+        }
+        if let Some(t) = &self.token {
+            head += &format!("X-Studio-Token: {t}\r\n");
         }
         for (k, v) in extra {
             head += &format!("{k}: {v}\r\n");

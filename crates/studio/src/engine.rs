@@ -450,9 +450,14 @@ pub fn mesh(
     check: &(dyn Fn() + Sync),
 ) -> Result<MeshData, EngineError> {
     let mut opts = MeshOptions::new(bounds, resolution);
-    // Smaller bricks than the default: a stale job stops sooner.
-    opts.brick = 16;
+    // Small bricks: a stale job stops sooner. The classification of the
+    // bricks before the first check takes time in proportion to their
+    // number, so fine resolutions take larger ones: about 32 a side at
+    // most (e.g. a 60-term model at 1000 cells: 0.4 s instead of 3.4 s
+    // with 16-cell bricks), so an export whose client left stops soon.
+    opts.brick = brick_for(resolution);
     let mut plan = Plan::new(shape, &opts)?;
+    check();
     let mut note = None;
     // At 64 cells or fewer the mesh is small whatever the model (at most a
     // few tens of MB), so the estimate's sampling is not worth its time.
@@ -492,6 +497,12 @@ pub fn mesh(
         triangles: m.triangles,
         note,
     })
+}
+
+/// Brick size (cells a side) for meshing at `resolution`: 16, up to 64
+/// so that there are at most about 32 bricks a side.
+pub(crate) fn brick_for(resolution: usize) -> usize {
+    resolution.div_ceil(32).clamp(16, 64)
 }
 
 /// Each attribute channel of the shape evaluated at `points`.

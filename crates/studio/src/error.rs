@@ -45,6 +45,12 @@ pub enum StudioError {
     /// A job was superseded by a newer edit.
     #[error("superseded by a newer edit")]
     Stale,
+    /// The client of a job closed its connection, so the job was stopped.
+    #[error("stopped: the client closed the connection")]
+    Gone,
+    /// Too much is running at once; the request may be retried.
+    #[error("{0}")]
+    Busy(String),
     /// A job panicked; the server caught it and goes on.
     #[error("internal error: {0}")]
     Panic(String),
@@ -57,6 +63,8 @@ impl StudioError {
             StudioError::Path { .. } => 403,
             StudioError::Request(_) => 400,
             StudioError::Stale => 409,
+            StudioError::Gone => 499,
+            StudioError::Busy(_) => 503,
             StudioError::Engine(EngineError::Limit(_)) | StudioError::Timeout(_) => 422,
             StudioError::Engine(_) => 422,
             _ => 500,

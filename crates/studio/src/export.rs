@@ -6,6 +6,7 @@
 //! into a staging folder and moved into place only when complete, so a
 //! stopped job leaves nothing behind.
 
+use crate::conn::Watch;
 use crate::engine::{self, SliceFormat};
 use crate::error::{io_at, StudioError};
 use crate::paths;
@@ -31,8 +32,9 @@ impl<'a> Slot<'a> {
     fn take(sh: &'a Shared) -> Result<Slot<'a>, StudioError> {
         if sh.jobs.fetch_add(1, Ordering::SeqCst) >= MAX_JOBS {
             sh.jobs.fetch_sub(1, Ordering::SeqCst);
-            return Err(StudioError::Request(format!(
-                "{MAX_JOBS} exports are already running; try again when they finish"
+            return Err(StudioError::Busy(format!(
+                "the studio is busy: {MAX_JOBS} renders or exports are already running; \
+                 retry when they finish"
             )));
         }
         Ok(Slot(sh))
@@ -63,8 +65,8 @@ impl Drop for Staging {
     }
 }
 
-fn limit_guard(sh: &Shared) -> Guard {
-    Guard::new(None, sh.sessions.config().job_seconds)
+fn limit_guard(sh: &Shared, client: Option<Watch>) -> Guard {
+    Guard::new(None, sh.sessions.config().job_seconds).for_client(client)
 }
 
 /// A slice format by name: `png`, `png-aa`, `svg`, `cli`.
@@ -88,8 +90,9 @@ pub(crate) fn section(
     value: f64,
     w: usize,
     h: usize,
+    client: Option<Watch>,
 ) -> Result<Vec<u8>, StudioError> {
-    let g = limit_guard(sh);
+    let g = limit_guard(sh, client);
     guarded(&g, |_| {
         Ok(engine::section_png(
             &snap.shape,
@@ -110,9 +113,10 @@ pub(crate) fn render(
     cut: bool,
     w: usize,
     h: usize,
+    client: Option<Watch>,
 ) -> Result<Vec<u8>, StudioError> {
     let _slot = Slot::take(sh)?;
-    let g = limit_guard(sh);
+    let g = limit_guard(sh, client);
     guarded(&g, |_| {
         Ok(engine::render_png(
             &snap.shape,
@@ -131,6 +135,7 @@ pub(crate) fn stl(
     sh: &Shared,
     snap: &Snapshot,
     resolution: Option<usize>,
+    client: Option<Watch>,
 ) -> Result<Vec<u8>, StudioError> {
     let have = match resolution {
         None => snap.meshes.iter().max_by_key(|m| m.data.resolution),
@@ -148,7 +153,7 @@ pub(crate) fn stl(
         )));
     }
     let _slot = Slot::take(sh)?;
-    let g = limit_guard(sh);
+    let g = limit_guard(sh, client);
     let limit = sh.sessions.config().memory_limit;
     let m = guarded(&g, |check| {
         Ok(engine::mesh(&snap.shape, snap.bounds, res, limit, check)?)
@@ -184,6 +189,7 @@ pub(crate) fn slices_zip(
     layer: f64,
     pixel: f64,
     format: SliceFormat,
+    client: Option<Watch>,
 ) -> Result<Vec<u8>, StudioError> {
     let (nx, ny, layers) = engine::slice_dims(snap.bounds, layer, pixel)?;
     let pixels = nx as f64 * ny as f64 * layers as f64;
@@ -200,7 +206,7 @@ pub(crate) fn slices_zip(
         SliceFormat::Cli => format!("{name}.cli"),
         _ => name.clone(),
     });
-    let g = limit_guard(sh);
+    let g = limit_guard(sh, client);
     guarded(&g, |check| {
         Ok(engine::write_slices(
             &snap.shape,
@@ -244,17 +250,68 @@ pub(crate) fn slices_zip(
     Ok(zw.finish()?.into_inner())
 }
 
-/// Writes the slice stack to `dir` under the working directory (which must
-/// not exist yet; its parent must); returns the layer count.
+/// The folder under the working directory that slice stacks are written
+/// into (made when first needed).
+pub const OUTPUT_DIR: &str = "studio-output";
+
+/// Checks an output name: a plain name (letters, digits, `.`, `_`, `-`;
+/// at most 128; not starting with `.`), so that it names a new entry of
+/// [`OUTPUT_DIR`] and nothing else.
+pub(crate) fn output_name(name: &str) -> Result<(), StudioError> {
+    let why = if name.is_empty() {
+        Some("is empty")
+    } else if name.contains('/') || name.contains('\\') {
+        Some("has a path separator")
+    } else if name.contains("..") {
+        Some("contains '..'")
+    } else if name.starts_with('.') {
+        Some("starts with '.'")
+    } else if name.len() > 128 {
+        Some("is longer than 128 characters")
+    } else if !name
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c))
+    {
+        Some("has characters other than letters, digits, '.', '_' and '-'")
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(StudioError::Request(format!(
+            "output name '{name}' refused: it {why}; give a plain folder name (e.g. \
+             'slices'), which is made under {OUTPUT_DIR}/ in the working directory"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Writes the slice stack to `OUTPUT_DIR/name` under the working directory
+/// (`name` a plain name, see [`output_name`]; the folder must not exist
+/// yet); returns the path written, relative to the working directory, and
+/// the layer count.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn slices_dir(
     sh: &Shared,
     snap: &Snapshot,
     layer: f64,
     pixel: f64,
     format: SliceFormat,
-    dir: &str,
-) -> Result<usize, StudioError> {
-    let target = paths::writable(&sh.root, dir, true)?;
+    name: &str,
+    client: Option<Watch>,
+) -> Result<(String, usize), StudioError> {
+    output_name(name)?;
+    let out = sh.root.join(OUTPUT_DIR);
+    match std::fs::symlink_metadata(&out) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => {
+            return Err(StudioError::Path {
+                path: OUTPUT_DIR.into(),
+                reason: "is not a folder (a file or a link is in its place)".into(),
+            })
+        }
+        Err(_) => std::fs::create_dir(&out).map_err(io_at(&out))?,
+    }
+    let target = paths::writable(&sh.root, &format!("{OUTPUT_DIR}/{name}"), true)?;
     let (_, _, layers) = engine::slice_dims(snap.bounds, layer, pixel)?;
     let _slot = Slot::take(sh)?;
     let parent = target
@@ -263,7 +320,7 @@ pub(crate) fn slices_dir(
         .ok_or_else(|| StudioError::Request("no parent folder".into()))?;
     let stage = Staging::new(parent)?;
     let tmp = stage.0.join("stack");
-    let g = limit_guard(sh);
+    let g = limit_guard(sh, client);
     guarded(&g, |check| {
         Ok(engine::write_slices(
             &snap.shape,
@@ -276,7 +333,7 @@ pub(crate) fn slices_dir(
         )?)
     })?;
     std::fs::rename(&tmp, &target.full).map_err(io_at(&target.full))?;
-    Ok(layers)
+    Ok((target.relative, layers))
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder.

@@ -26,8 +26,11 @@
 //!
 //! Endpoints: every route is in [`ROUTES`] (which the router itself looks
 //! up) and documented in the crate's `API.md`, which the server serves at
-//! `GET /api`: parameters, limits, replies and errors. Every `POST` needs
-//! the header `X-Studio: 1`; mesh buffers are laid out as [`wire`] says.
+//! `GET /api`: parameters, limits, replies and errors. Every request for
+//! the page or the API carries the studio's random token
+//! ([`Studio::token`], printed in the address at start as
+//! `http://127.0.0.1:8321/?token=...`), every `POST` the header
+//! `X-Studio: 1`; mesh buffers are laid out as [`wire`] says.
 //!
 //! ```
 //! use microfrep_studio::{client, ServeOptions, Studio};
@@ -41,7 +44,7 @@
 //!     ..ServeOptions::default()
 //! })
 //! .unwrap();
-//! let c = client::Client::new(studio.addr());
+//! let c = studio.client();
 //! let s = c.post_json("/api/session", &serde_json::json!({})).unwrap();
 //! let id = s["session"].as_str().unwrap().to_string();
 //! let src = "my_model(x[3], a[1]) { my_model = 1 - x[1]^2 - x[2]^2 - x[3]^2; }";
@@ -53,7 +56,9 @@
 //! # std::fs::remove_dir_all(&dir).ok();
 //! ```
 
+mod auth;
 pub mod client;
+mod conn;
 pub mod engine;
 mod error;
 mod export;
@@ -106,6 +111,10 @@ pub struct ServeOptions {
     /// own bindings it may lie outside it). An edit's `fields` and a model's
     /// `--field` comments bind other names; the edit's win, then these.
     pub fields: Vec<(String, String)>,
+    /// The token every request must carry (see [`Studio::token`]): `None`
+    /// (the default) draws a random one of 256 bits from the OS; a fixed
+    /// one (16 to 256 letters, digits, `-`, `_`) is for tests and scripts.
+    pub token: Option<String>,
 }
 
 impl Default for ServeOptions {
@@ -122,6 +131,7 @@ impl Default for ServeOptions {
             settle: Duration::from_millis(300),
             max_sessions: 32,
             fields: Vec::new(),
+            token: None,
         }
     }
 }
@@ -132,12 +142,20 @@ pub struct Studio {
     addr: SocketAddr,
     thread: Option<std::thread::JoinHandle<()>>,
     scratch: PathBuf,
+    token: String,
 }
 
 impl Studio {
     /// Starts listening and serving on a background thread.
     pub fn start(opts: ServeOptions) -> Result<Studio, StudioError> {
         engine::install();
+        let token = match &opts.token {
+            Some(t) => {
+                auth::check_token(t)?;
+                t.clone()
+            }
+            None => auth::random_hex(auth::TOKEN_BYTES)?,
+        };
         let root = opts.root.canonicalize().map_err(error::io_at(&opts.root))?;
         let initial = match &opts.model {
             Some(p) => {
@@ -196,7 +214,10 @@ impl Studio {
             root,
             initial,
             addr,
+            token: token.clone(),
             in_flight: AtomicUsize::new(0),
+            polls: AtomicUsize::new(0),
+            statics: AtomicUsize::new(0),
             scratch: scratch.clone(),
             jobs: AtomicUsize::new(0),
         });
@@ -211,6 +232,7 @@ impl Studio {
             addr,
             thread: Some(thread),
             scratch,
+            token,
         })
     }
 
@@ -219,9 +241,21 @@ impl Studio {
         self.addr
     }
 
-    /// The page's address, e.g. `http://127.0.0.1:8321/`.
+    /// The page's address with its token, e.g.
+    /// `http://127.0.0.1:8321/?token=...`: what to open in the browser.
     pub fn url(&self) -> String {
-        format!("http://{}/", self.addr)
+        format!("http://{}/?token={}", self.addr, self.token)
+    }
+
+    /// The token every request must carry: as the header `X-Studio-Token`,
+    /// or the query parameter `token`.
+    pub fn token(&self) -> &str {
+        &self.token
+    }
+
+    /// A client of this studio that sends its token.
+    pub fn client(&self) -> client::Client {
+        client::Client::new(self.addr).with_token(&self.token)
     }
 
     /// Serves until the process ends.
@@ -253,6 +287,7 @@ const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 pub fn serve(opts: ServeOptions) -> Result<(), StudioError> {
     let studio = Studio::start(opts)?;
     println!("microfrep studio: {}", studio.url());
+    println!("(open this address; the token in it keeps other users of this machine out)");
     studio.wait();
     Ok(())
 }

@@ -1,27 +1,50 @@
 //! The HTTP side: routing, request checks and replies.
 //!
-//! Every request runs on its own thread (long polls wait there); at most
-//! [`MAX_IN_FLIGHT`] at once, the rest are answered 503. Requests must name
-//! a loopback host when the server listens on loopback (against DNS
-//! rebinding), and every `POST` must carry the header `X-Studio: 1`, which
-//! a cross-site form cannot send, so other web pages cannot drive the
-//! studio.
+//! Every request runs on its own thread, with a stack sized for what a
+//! request does ([`REQUEST_STACK`]). Three kinds are admitted separately,
+//! so one kind cannot starve another: the page and its static assets (at
+//! most [`MAX_STATIC`] at once), long polls that wait for news
+//! (`/api/state`, `/api/wait`; at most [`MAX_POLLS`]) and the rest, the
+//! work (at most [`MAX_IN_FLIGHT`]). Past a limit, or when no thread can be
+//! started (address space under `ulimit -v`), a request is answered 503
+//! with a message to retry, never dropped. A render or export whose client
+//! closes the connection is stopped at its next check ([`crate::conn`]).
+//!
+//! Requests must name a loopback host when the server listens on loopback
+//! (against DNS rebinding), carry the studio's token (header
+//! `X-Studio-Token` or query `token`; the static assets and `GET /api`
+//! excepted), and every `POST` must carry the header `X-Studio: 1`, which
+//! a cross-site form cannot send, so other web pages and other local users
+//! cannot drive the studio.
 
+use crate::auth;
+use crate::conn::Watch;
 use crate::error::{io_at, StudioError};
 use crate::export;
 use crate::paths;
-use crate::session::{panic_message, Edit, MeshLevel, Sessions, BIG_STACK};
+use crate::session::{panic_message, Edit, MeshLevel, Sessions};
 use serde_json::{json, Value};
 use std::io::Read;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tiny_http::{Header, Method, Request, Response, StatusCode};
 
-/// Requests handled at once.
+/// Work requests (everything but the page, its assets and long polls)
+/// handled at once.
 pub const MAX_IN_FLIGHT: usize = 64;
+/// Long polls (`/api/state`, `/api/wait`) waiting at once.
+pub const MAX_POLLS: usize = 128;
+/// Page and asset requests served at once.
+pub const MAX_STATIC: usize = 64;
+/// Stack of a request thread. Requests evaluate lowered models (the
+/// meshing, slicing and rendering run on the rayon pool, and HyperFun's
+/// per-point interpreter grows its stack on the heap where it nests deeply)
+/// and may drop the last reference to a model's graph, which does not
+/// recurse; 1 GiB stacks let only a few requests start under `ulimit -v`.
+pub const REQUEST_STACK: usize = 8 << 20;
 /// Largest request body accepted.
 pub const MAX_BODY: u64 = 4 << 20;
 /// Longest a state poll waits for news.
@@ -53,7 +76,14 @@ pub(crate) struct Shared {
     /// The model named at start: (name shown, source).
     pub initial: (String, String),
     pub addr: SocketAddr,
+    /// The token every request must carry.
+    pub token: String,
+    /// Work requests running.
     pub in_flight: AtomicUsize,
+    /// Long polls waiting.
+    pub polls: AtomicUsize,
+    /// Page and asset requests being served.
+    pub statics: AtomicUsize,
     /// Staging folders for slice downloads.
     pub scratch: PathBuf,
     pub jobs: AtomicUsize,
@@ -112,7 +142,11 @@ impl Reply {
         )
     }
     fn error(e: &StudioError) -> Reply {
-        Reply::json(json!({ "error": e.to_string() })).status(e.status())
+        let r = Reply::json(json!({ "error": e.to_string() })).status(e.status());
+        match e {
+            StudioError::Busy(_) => r.header("Retry-After", "1"),
+            _ => r,
+        }
     }
 }
 
@@ -180,24 +214,94 @@ fn send(rq: Request, r: Reply) {
     };
 }
 
+/// What a request is, for admission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// The page, its scripts and styles, the API document.
+    Static,
+    /// Waits for news: `/api/state`, `/api/wait`.
+    Poll,
+    /// Everything else.
+    Work,
+}
+
+/// Paths served without the token: the page's scripts and styles (no
+/// secret, and what a page without its token needs to say so) and the API
+/// document.
+const PUBLIC: &[&str] = &[
+    "/studio.js",
+    "/viewer.js",
+    "/editor.js",
+    "/studio.css",
+    "/favicon.ico",
+    "/api",
+];
+
+fn kind(url: &str) -> Kind {
+    let path = url.split_once('?').map_or(url, |(p, _)| p);
+    if PUBLIC.contains(&path) || path == "/" || path == "/index.html" {
+        Kind::Static
+    } else if path == "/api/state" || path == "/api/wait" {
+        Kind::Poll
+    } else {
+        Kind::Work
+    }
+}
+
+impl Shared {
+    fn counter(&self, k: Kind) -> (&AtomicUsize, usize) {
+        match k {
+            Kind::Static => (&self.statics, MAX_STATIC),
+            Kind::Poll => (&self.polls, MAX_POLLS),
+            Kind::Work => (&self.in_flight, MAX_IN_FLIGHT),
+        }
+    }
+}
+
+/// The reply to a request that cannot be taken now.
+fn busy(what: &str) -> Reply {
+    Reply::json(json!({
+        "error": format!("the studio is busy ({what}); retry in a moment"),
+        "busy": true,
+    }))
+    .status(503)
+    .header("Retry-After", "1")
+}
+
 /// Accepts requests until the server is unblocked.
 pub(crate) fn run(server: Arc<tiny_http::Server>, shared: Arc<Shared>) {
     for rq in server.incoming_requests() {
-        if shared.in_flight.fetch_add(1, Ordering::SeqCst) >= MAX_IN_FLIGHT {
-            shared.in_flight.fetch_sub(1, Ordering::SeqCst);
-            send(rq, Reply::json(json!({"error": "server busy"})).status(503));
+        let k = kind(rq.url());
+        let (count, max) = shared.counter(k);
+        if count.fetch_add(1, Ordering::SeqCst) >= max {
+            count.fetch_sub(1, Ordering::SeqCst);
+            let what = match k {
+                Kind::Static => format!("{max} page requests at once"),
+                Kind::Poll => format!("{max} long polls at once"),
+                Kind::Work => format!("{max} requests at once"),
+            };
+            send(rq, busy(&what));
             continue;
         }
-        let sh = shared.clone();
+        // The request goes back to this thread if no thread can start.
+        let cell = Arc::new(Mutex::new(Some(rq)));
+        let (sh, c2) = (shared.clone(), cell.clone());
         let spawned = std::thread::Builder::new()
             .name("studio-request".into())
-            .stack_size(BIG_STACK)
+            .stack_size(REQUEST_STACK)
             .spawn(move || {
-                handle(rq, &sh);
-                sh.in_flight.fetch_sub(1, Ordering::SeqCst);
+                let rq = c2.lock().unwrap_or_else(|e| e.into_inner()).take();
+                if let Some(rq) = rq {
+                    handle(rq, &sh);
+                }
+                sh.counter(k).0.fetch_sub(1, Ordering::SeqCst);
             });
-        if spawned.is_err() {
-            shared.in_flight.fetch_sub(1, Ordering::SeqCst);
+        if let Err(e) = spawned {
+            count.fetch_sub(1, Ordering::SeqCst);
+            let rq = cell.lock().unwrap_or_else(|e| e.into_inner()).take();
+            if let Some(rq) = rq {
+                send(rq, busy(&format!("cannot start a thread: {e}")));
+            }
         }
     }
 }
@@ -294,6 +398,24 @@ fn has_header(rq: &Request, k: &str, v: &str) -> bool {
     rq.headers()
         .iter()
         .any(|h| h.field.as_str().as_str().eq_ignore_ascii_case(k) && h.value.as_str() == v)
+}
+
+/// The request carries the studio's token, as the header `X-Studio-Token`
+/// or the query parameter `token`.
+fn token_ok(rq: &Request, q: &Query, sh: &Shared) -> bool {
+    let header = rq
+        .headers()
+        .iter()
+        .find(|h| h.field.equiv("X-Studio-Token"))
+        .map(|h| h.value.as_str());
+    header
+        .or_else(|| q.get("token"))
+        .is_some_and(|t| auth::same(t, &sh.token))
+}
+
+/// Watches the request's connection, so a job stops when its client goes.
+fn watch(rq: &Request, sh: &Shared) -> Option<Watch> {
+    Watch::new(rq.remote_addr().copied(), sh.addr.port())
 }
 
 fn body_json(rq: &mut Request) -> Result<Value, StudioError> {
@@ -422,6 +544,17 @@ fn route(rq: &mut Request, sh: &Shared) -> Result<Reply, StudioError> {
     let (path, query) = url.split_once('?').unwrap_or((&url, ""));
     let q = Query::parse(query);
     let method = rq.method().clone();
+    if !PUBLIC.contains(&path) && !token_ok(rq, &q, sh) {
+        let msg = format!(
+            "missing or wrong token: open the address the studio printed when it started \
+             (http://{}/?token=...); scripts send the token as the header X-Studio-Token",
+            sh.addr
+        );
+        if method == Method::Get && (path == "/" || path == "/index.html") {
+            return Ok(Reply::text("text/plain; charset=utf-8", &msg).status(403));
+        }
+        return Ok(Reply::json(json!({ "error": msg })).status(403));
+    }
     if method == Method::Post && !has_header(rq, "X-Studio", "1") {
         return Ok(Reply::json(json!({"error": "missing header X-Studio: 1"})).status(403));
     }
@@ -592,7 +725,7 @@ fn mesh(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
     }
 }
 
-fn section_png(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+fn section_png(rq: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
     let s = sh.sessions.get(q.req("session")?)?;
     let snap = s.snapshot(q.num("gen")?)?;
     let axis: usize = q.num("axis")?;
@@ -608,11 +741,11 @@ fn section_png(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioE
     }
     Ok(Reply::bytes(
         "image/png",
-        export::section(sh, &snap, axis, value, w, h)?,
+        export::section(sh, &snap, axis, value, w, h, watch(rq, sh))?,
     ))
 }
 
-fn render_png(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+fn render_png(rq: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
     let s = sh.sessions.get(q.req("session")?)?;
     let snap = s.snapshot(q.num("gen")?)?;
     let (w, h): (usize, usize) = (q.num_or("w", 640)?, q.num_or("h", 480)?);
@@ -625,18 +758,18 @@ fn render_png(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioEr
     let cut = q.get("cutaway") == Some("1");
     Ok(Reply::bytes(
         "image/png",
-        export::render(sh, &snap, view, cut, w, h)?,
+        export::render(sh, &snap, view, cut, w, h, watch(rq, sh))?,
     ))
 }
 
-fn export_stl(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+fn export_stl(rq: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
     let s = sh.sessions.get(q.req("session")?)?;
     let snap = s.snapshot(q.num("gen")?)?;
     let res: Option<usize> = match q.get("resolution") {
         Some(_) => Some(q.num("resolution")?),
         None => None,
     };
-    let bytes = export::stl(sh, &snap, res)?;
+    let bytes = export::stl(sh, &snap, res, watch(rq, sh))?;
     Ok(Reply::bytes("model/stl", bytes).attachment(&stem_with(&snap.file, ".stl")))
 }
 
@@ -647,13 +780,13 @@ fn export_hf(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioErr
         .attachment(&stem_with(&snap.file, ".hf")))
 }
 
-fn slices_zip(_: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
+fn slices_zip(rq: &mut Request, sh: &Shared, q: &Query) -> Result<Reply, StudioError> {
     let s = sh.sessions.get(q.req("session")?)?;
     let snap = s.snapshot(q.num("gen")?)?;
     let layer: f64 = q.num("layer")?;
     let pixel: f64 = q.num("pixel")?;
     let format = export::slice_format(q.get("format").unwrap_or("png"))?;
-    let bytes = export::slices_zip(sh, &snap, layer, pixel, format)?;
+    let bytes = export::slices_zip(sh, &snap, layer, pixel, format, watch(rq, sh))?;
     Ok(Reply::bytes("application/zip", bytes).attachment(&stem_with(&snap.file, "-slices.zip")))
 }
 
@@ -666,15 +799,16 @@ fn slices_dir(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioE
     let snap = s.snapshot(gen)?;
     let format = export::slice_format(v.get("format").and_then(Value::as_str).unwrap_or("png"))?;
     let dir = str_field(&v, "dir")?;
-    let layers = export::slices_dir(
+    let (written, layers) = export::slices_dir(
         sh,
         &snap,
         f64_field(&v, "layer")?,
         f64_field(&v, "pixel")?,
         format,
         dir,
+        watch(rq, sh),
     )?;
-    Ok(Reply::json(json!({ "written": dir, "layers": layers })))
+    Ok(Reply::json(json!({ "written": written, "layers": layers })))
 }
 
 fn save(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {

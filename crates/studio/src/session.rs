@@ -25,10 +25,12 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
-/// Stack of worker and request threads: lowering and dropping very deep
-/// expression graphs (a HyperFun loop unrolled a million times) recurse
-/// deeply. Only touched pages are committed.
-pub(crate) const BIG_STACK: usize = 1 << 30;
+/// Stack of the session workers and probes, which lower and evaluate the
+/// model. HyperFun's lowering and its per-point interpreter move to fresh
+/// heap segments when their stack runs low (`stacker`), and expression
+/// graphs are dropped without recursion, so this need not grow with the
+/// model; it is reserved address space, which `ulimit -v` counts.
+pub(crate) const WORKER_STACK: usize = 16 << 20;
 
 /// What the workers may spend and how they refine.
 #[derive(Clone, Debug)]
@@ -60,6 +62,8 @@ pub(crate) enum Abort {
     Stale,
     /// The stage ran past its time limit.
     Timeout,
+    /// The client of the request closed its connection.
+    Gone,
 }
 
 /// Stops a job that is stale or over time, by unwinding from inside the
@@ -68,6 +72,8 @@ pub(crate) struct Guard {
     gen: Option<(Arc<AtomicU64>, u64)>,
     deadline: Instant,
     pub(crate) limit: f64,
+    /// The connection of the request the job answers.
+    client: Option<crate::conn::Watch>,
 }
 
 impl Guard {
@@ -77,7 +83,14 @@ impl Guard {
             gen,
             deadline: Instant::now() + Duration::from_secs_f64(limit),
             limit,
+            client: None,
         }
+    }
+
+    /// Also stops when the request's client goes away.
+    pub(crate) fn for_client(mut self, client: Option<crate::conn::Watch>) -> Guard {
+        self.client = client;
+        self
     }
 
     pub(crate) fn stale(&self) -> bool {
@@ -94,6 +107,9 @@ impl Guard {
         if Instant::now() > self.deadline {
             resume_unwind(Box::new(Abort::Timeout));
         }
+        if self.client.as_ref().is_some_and(|c| c.gone()) {
+            resume_unwind(Box::new(Abort::Gone));
+        }
     }
 }
 
@@ -109,6 +125,7 @@ pub(crate) fn guarded<T>(
         Err(p) => Err(match p.downcast_ref::<Abort>() {
             Some(Abort::Stale) => StudioError::Stale,
             Some(Abort::Timeout) => StudioError::Timeout(guard.limit),
+            Some(Abort::Gone) => StudioError::Gone,
             None => StudioError::Panic(panic_message(&p)),
         }),
     }
@@ -263,7 +280,7 @@ impl Session {
             let me = self.clone();
             let spawned = std::thread::Builder::new()
                 .name(format!("studio-{}", self.id))
-                .stack_size(BIG_STACK)
+                .stack_size(WORKER_STACK)
                 .spawn(move || me.work());
             if let Err(e) = spawned {
                 st.worker = false;
@@ -879,7 +896,7 @@ impl Session {
         let (s, a, ctr) = (shape.clone(), abandon.clone(), self.gen.clone());
         std::thread::Builder::new()
             .name("studio-probe".into())
-            .stack_size(BIG_STACK)
+            .stack_size(WORKER_STACK)
             .spawn(move || {
                 let stop = || a.load(Ordering::Relaxed) || ctr.load(Ordering::Relaxed) != gen;
                 let r = catch_unwind(AssertUnwindSafe(|| {
@@ -1146,7 +1163,6 @@ fn pad(b: [[f64; 3]; 2]) -> [[f64; 3]; 2] {
 /// All sessions of a server.
 pub struct Sessions {
     map: Mutex<HashMap<String, Arc<Session>>>,
-    next: AtomicU64,
     cfg: Arc<Config>,
     parts: Arc<Parts>,
 }
@@ -1167,7 +1183,6 @@ impl Sessions {
         let parts = Arc::new(Parts::new(root, cfg.memory_limit as u64));
         Sessions {
             map: Mutex::new(HashMap::new()),
-            next: AtomicU64::new(1),
             cfg: Arc::new(cfg),
             parts,
         }
@@ -1191,8 +1206,14 @@ impl Sessions {
                 map.len()
             )));
         }
-        let n = self.next.fetch_add(1, Ordering::SeqCst);
-        let id = format!("s{n}");
+        // Random, so one session (or another local user) cannot guess
+        // another's id; unique among the open ones.
+        let id = loop {
+            let id = format!("s{}", crate::auth::random_hex(crate::auth::SESSION_BYTES)?);
+            if !map.contains_key(&id) {
+                break id;
+            }
+        };
         let s = Arc::new(Session::new(
             id.clone(),
             self.cfg.clone(),

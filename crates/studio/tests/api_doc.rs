@@ -3,7 +3,6 @@
 //! heading is a route; the studio serves the file at `GET /api`, and each
 //! documented route answers (nothing falls through to the 404 handler).
 
-use microfrep_studio::client::Client;
 use microfrep_studio::{ServeOptions, Studio, API_MD, ROUTES};
 use std::collections::BTreeSet;
 use std::time::Duration;
@@ -71,7 +70,7 @@ fn api_is_served_and_every_route_is_answered() {
         ..ServeOptions::default()
     })
     .unwrap();
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     let r = c.get("/api").unwrap();
     assert_eq!(r.status, 200);
     assert_eq!(

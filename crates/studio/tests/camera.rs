@@ -9,7 +9,6 @@
 //! failure. The headless-browser test (`browser.rs`) checks the same rule in
 //! the real page.
 
-use microfrep_studio::client::Client;
 use microfrep_studio::{ServeOptions, Studio};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -108,7 +107,7 @@ fn camera_refits_when_the_box_changes_materially() {
         ..ServeOptions::default()
     })
     .unwrap();
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     let js = c.get("/viewer.js").unwrap();
     assert_eq!(js.status, 200);
     assert_eq!(

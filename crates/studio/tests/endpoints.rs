@@ -28,7 +28,7 @@ fn start(root: &std::path::Path) -> (Studio, Client) {
     })
     .unwrap();
     assert!(studio.addr().ip().is_loopback());
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     (studio, c)
 }
 
@@ -120,14 +120,16 @@ fn diagnostics_meshes_analysis_exports_and_refusals() {
         let body = json!({"session": s, "source": SPHERE}).to_string();
         write!(
             t,
-            "POST /api/edit HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nConnection: close\r\nContent-Type: text/plain\r\nContent-Length: {}\r\n\r\n{body}",
+            "POST /api/edit HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nX-Studio-Token: {}\r\nConnection: close\r\nContent-Type: text/plain\r\nContent-Length: {}\r\n\r\n{body}",
             studio.addr().port(),
+            studio.token(),
             body.len()
         )
         .unwrap();
         let mut out = String::new();
         t.read_to_string(&mut out).unwrap();
         assert!(out.starts_with("HTTP/1.1 403"), "{out}");
+        assert!(out.contains("X-Studio: 1"), "{out}");
     }
 
     // A broken model: diagnostics with positions, rendered as `check` does.
@@ -328,17 +330,39 @@ fn diagnostics_meshes_analysis_exports_and_refusals() {
         )
         .unwrap()
     };
-    assert_eq!(slices("../out").status, 403);
-    assert_eq!(
-        slices("models").status,
-        403,
-        "existing folders are not overwritten"
-    );
+    // Output names are plain names of new folders under studio-output/.
+    for bad in [
+        "../out",
+        "a/b",
+        "/tmp/abs",
+        "..",
+        "a..b",
+        ".hidden",
+        "",
+        "sub\\x",
+        "models/../x",
+    ] {
+        let r = slices(bad);
+        assert_eq!(r.status, 400, "{bad}: {}", String::from_utf8_lossy(&r.body));
+        let msg = r.json()["error"].as_str().unwrap_or_default().to_string();
+        assert!(
+            msg.contains("output name") && msg.contains("studio-output"),
+            "{bad}: {msg}"
+        );
+    }
+    assert!(!dir.join("out").exists() && !dir.parent().unwrap().join("out").exists());
+    assert!(!std::path::Path::new("/tmp/abs").exists());
     let r = slices("stack");
     assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
     assert_eq!(r.json()["layers"], 4);
-    assert!(dir.join("stack/manifest.json").is_file());
-    assert!(dir.join("stack/layer_00003.png").is_file());
+    assert_eq!(r.json()["written"], "studio-output/stack");
+    assert!(dir.join("studio-output/stack/manifest.json").is_file());
+    assert!(dir.join("studio-output/stack/layer_00003.png").is_file());
+    assert_eq!(
+        slices("stack").status,
+        403,
+        "existing folders are not overwritten"
+    );
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .flatten()
@@ -455,7 +479,7 @@ fn memory_limit_lowers_the_resolution() {
         ..ServeOptions::default()
     })
     .unwrap();
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     let s = session(&c);
     // Many small features: at 200 cells the mesh would need far more than
     // 100 MB.

@@ -156,7 +156,7 @@ fn mesh_parts_come_coarse_to_fine_as_fast_as_formulas() {
         ..ServeOptions::default()
     })
     .unwrap();
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     let formula = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../examples/fryazinov_fig4_toriball_block.hf"),
@@ -337,7 +337,7 @@ fn large_scans_come_coarse_first_then_full() {
         ..ServeOptions::default()
     })
     .unwrap();
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     let s = c.post_json("/api/session", &json!({})).unwrap()["session"]
         .as_str()
         .unwrap()
@@ -409,7 +409,7 @@ fn large_scans_come_coarse_first_then_full() {
         ..ServeOptions::default()
     })
     .unwrap();
-    let c = Client::new(studio.addr());
+    let c = studio.client();
     let s = c.post_json("/api/session", &json!({})).unwrap()["session"]
         .as_str()
         .unwrap()
