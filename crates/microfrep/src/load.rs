@@ -481,7 +481,7 @@ fn mesh_field(
     src.check_keys(&["weld", "sign", "smooth"])?;
     let smooth = src.number("smooth")?;
     if let Some(r) = smooth {
-        if !(r > 0.0) {
+        if r <= 0.0 {
             return Err(src.bad(format!("smooth={r} must be a positive length in mm")));
         }
     }
