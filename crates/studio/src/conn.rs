@@ -31,12 +31,12 @@ pub(crate) struct Watch {
 
 impl Watch {
     /// A watch of the connection from `remote` to the server's `local_port`;
-    /// `None` where connections cannot be watched (no address, or no socket
-    /// table to read).
+    /// `None` where connections cannot be watched (no address, no socket
+    /// table to read, or the table does not list this connection: then it
+    /// is never taken for gone).
     pub(crate) fn new(remote: Option<SocketAddr>, local_port: u16) -> Option<Watch> {
         let remote = remote?;
-        // Only where the table can be read and lists this connection.
-        state(remote, local_port)?;
+        lookup(remote, local_port)??;
         Some(Watch {
             remote,
             local_port,
@@ -65,8 +65,11 @@ impl Watch {
         {
             return false;
         }
-        let gone = match state(self.remote, self.local_port) {
-            Some(st) => st != ESTABLISHED,
+        // Listed but no longer established, or no longer listed at all
+        // (reset and removed); an unreadable table tells nothing.
+        let gone = match lookup(self.remote, self.local_port) {
+            Some(Some(st)) => st != ESTABLISHED,
+            Some(None) => true,
             None => false,
         };
         if gone {
@@ -78,13 +81,13 @@ impl Watch {
 
 /// `TCP_ESTABLISHED` in the kernel's numbering.
 const ESTABLISHED: u8 = 1;
-/// `TCP_CLOSE`: what a connection that is not listed any more counts as.
+/// `TCP_CLOSE`.
 const CLOSED: u8 = 7;
 
 /// The server-side state of the connection from `remote` to `local_port`:
-/// `ESTABLISHED` if any matching entry is, [`CLOSED`] if none is listed,
-/// `None` if the table cannot be read.
-fn state(remote: SocketAddr, local_port: u16) -> Option<u8> {
+/// `ESTABLISHED` if any matching entry is, else another entry's state;
+/// `Some(None)` if none is listed, `None` if the table cannot be read.
+fn lookup(remote: SocketAddr, local_port: u16) -> Option<Option<u8>> {
     if !cfg!(target_os = "linux") {
         return None;
     }
@@ -118,12 +121,12 @@ fn state(remote: SocketAddr, local_port: u16) -> Option<u8> {
         if r == rem && local.ends_with(&port) {
             let st = u8::from_str_radix(st, 16).unwrap_or(CLOSED);
             if st == ESTABLISHED {
-                return Some(st);
+                return Some(Some(st));
             }
             found = Some(st);
         }
     }
-    Some(found.unwrap_or(CLOSED))
+    Some(found)
 }
 
 #[cfg(test)]
@@ -138,7 +141,10 @@ mod tests {
         let port = l.local_addr().unwrap().port();
         let mut c = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
         let (s, remote) = l.accept().unwrap();
-        let w = Watch::new(Some(remote), port).expect("the socket table is readable");
+        let w = Watch::new(Some(remote), port).expect("the socket table lists the connection");
+        // A connection the table does not list is not watched.
+        let unknown: SocketAddr = "127.0.0.1:1".parse().unwrap();
+        assert!(Watch::new(Some(unknown), port).is_none());
         assert!(!w.gone());
         // The server's own half-close of reading is not the client leaving.
         s.shutdown(std::net::Shutdown::Read).unwrap();
