@@ -805,7 +805,9 @@ mod tests {
         // Unmarked text and a lone marker pass through.
         assert_eq!(with_option_names("a \u{27e8}b", &cli_option), "a \u{27e8}b");
         // No message of the fill spells a CLI option itself.
-        let src = include_str!("mod.rs");
+        // The code before the tests.
+        let all = include_str!("mod.rs");
+        let src = &all[..all.find("#[cfg(test)]").unwrap_or(all.len())];
         let dashes = "-".repeat(2);
         let needles: Vec<String> = ["cell", "shell", "density", "seed", "sheet", "bounds"]
             .iter()
