@@ -35,7 +35,7 @@ mod tables;
 mod tpms;
 
 pub use struts::{strut_model, StrutCall, StrutModel};
-pub use tables::{strut_table, tpms_table};
+pub use tables::{solve_strut_table, solve_tpms_table, strut_table, tpms_table};
 
 use microfrep_hyperfun::library::{add_extension, Registry};
 
