@@ -99,6 +99,23 @@ fn sample_count(dims: [usize; 3]) -> Result<usize, GridError> {
         .ok_or(GridError::TooLarge(dims))
 }
 
+/// Checks `values` as the samples of a grid of `dims` (x fastest): the
+/// sizes, the count, and that every value is finite.
+pub(crate) fn check_samples(dims: [usize; 3], values: &[f64]) -> Result<(), GridError> {
+    let want = sample_count(dims)?;
+    if values.len() != want {
+        return Err(GridError::WrongLength {
+            dims,
+            got: values.len(),
+            want,
+        });
+    }
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(GridError::NotFinite { index }),
+        None => Ok(()),
+    }
+}
+
 impl GridField {
     /// A grid of `dims` samples spanning the box `min`..`max` (samples on the
     /// box corners), `values` with x fastest, then y, then z.
@@ -115,21 +132,11 @@ impl GridField {
         max: [f64; 3],
         values: Vec<f64>,
     ) -> Result<GridField, GridError> {
-        let want = sample_count(dims)?;
-        if values.len() != want {
-            return Err(GridError::WrongLength {
-                dims,
-                got: values.len(),
-                want,
-            });
-        }
+        check_samples(dims, &values)?;
         for a in 0..3 {
             if !min[a].is_finite() || !max[a].is_finite() || min[a] >= max[a] {
                 return Err(GridError::BadBox(a));
             }
-        }
-        if let Some(index) = values.iter().position(|v| !v.is_finite()) {
-            return Err(GridError::NotFinite { index });
         }
         let [nx, ny, nz] = dims;
         let mut cell_range = Vec::with_capacity((nx - 1) * (ny - 1) * (nz - 1));

@@ -5,7 +5,7 @@
 //! within the range of the control values it mixes, which gives sound
 //! interval bounds.
 
-use crate::field::{Field, GridError, MAX_SAMPLES};
+use crate::field::{Field, GridError};
 use crate::interval::Interval;
 
 /// Control values per side of a block of the min/max table.
@@ -61,28 +61,11 @@ impl SplineField {
         step: [f64; 3],
         values: Vec<f64>,
     ) -> Result<SplineField, GridError> {
-        if dims.iter().any(|&d| d < 2) {
-            return Err(GridError::TooSmall(dims));
-        }
-        let want = dims
-            .iter()
-            .try_fold(1usize, |n, &d| n.checked_mul(d))
-            .filter(|&n| n <= MAX_SAMPLES)
-            .ok_or(GridError::TooLarge(dims))?;
-        if values.len() != want {
-            return Err(GridError::WrongLength {
-                dims,
-                got: values.len(),
-                want,
-            });
-        }
+        crate::field::check_samples(dims, &values)?;
         for a in 0..3 {
             if !(min[a].is_finite() && step[a].is_finite() && step[a] > 0.0) {
                 return Err(GridError::BadBox(a));
             }
-        }
-        if let Some(index) = values.iter().position(|v| !v.is_finite()) {
-            return Err(GridError::NotFinite { index });
         }
         let nb: [usize; 3] = std::array::from_fn(|a| dims[a].div_ceil(BLOCK));
         let mut blocks = vec![(f64::INFINITY, f64::NEG_INFINITY); nb[0] * nb[1] * nb[2]];
