@@ -4,31 +4,12 @@
 //! the porosity measured in three depth bands rises with depth as designed
 //! (the deepest band at the closed form of its constant pore radius).
 
+mod common;
 use microfrep::mesh::check::check;
 use microfrep::mesh::{MeshOptions, Plan};
 use microfrep::{load, LoadOptions};
 use std::f64::consts::PI;
 use std::path::PathBuf;
-
-fn femur() -> Option<String> {
-    let dir = std::env::var_os("MICROFREP_MESHES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes")
-        });
-    let p = dir.join("femur.stl");
-    if p.exists() {
-        Some(p.display().to_string())
-    } else if std::env::var_os("MICROFREP_MESHES").is_some() {
-        panic!("MICROFREP_MESHES is set but {} is absent", p.display());
-    } else {
-        eprintln!(
-            "SKIPPED: {} is absent (set MICROFREP_MESHES to the bone meshes)",
-            p.display()
-        );
-        None
-    }
-}
 
 /// Deterministic points in a box.
 fn points(lo: [f64; 3], hi: [f64; 3], n: usize) -> Vec<[f64; 3]> {
@@ -57,7 +38,9 @@ fn pore_share(r: f64) -> f64 {
 
 #[test]
 fn the_bone_example_is_watertight_and_its_pores_open_up_with_depth() {
-    let Some(femur) = femur() else { return };
+    let Some(femur) = common::bone("femur.stl") else {
+        return;
+    };
     let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/pasko_fig7_bone.hf");
     let opts = LoadOptions {
         fields: vec![("part".into(), femur.clone())],

@@ -3,6 +3,7 @@
 //! same values; a skin is a true distance on a non-distance part; the
 //! measured report agrees with independent measurements.
 
+mod common;
 use microfrep::fill::{fill, Density, FillOptions, MeasureOptions, Part, Structure};
 use microfrep::{load, Bounds, LoadOptions};
 use std::path::PathBuf;
@@ -305,26 +306,6 @@ fn irregular_pores_follow_the_parts_box_and_oversized_cells_are_refused() {
     assert!(fill(&part, &o, &quiet).is_err());
 }
 
-fn bone(name: &str) -> Option<String> {
-    let dir = std::env::var_os("MICROFREP_MESHES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes")
-        });
-    let p = dir.join(name);
-    if p.exists() {
-        Some(p.display().to_string())
-    } else if std::env::var_os("MICROFREP_MESHES").is_some() {
-        panic!("MICROFREP_MESHES is set but {} is absent", p.display());
-    } else {
-        eprintln!(
-            "SKIPPED: {} is absent (set MICROFREP_MESHES to the bone meshes)",
-            p.display()
-        );
-        None
-    }
-}
-
 /// Monte Carlo infill fraction of the core over `n` points of the box, with
 /// its standard error.
 fn monte_carlo_density(f: &microfrep::fill::Filled, n: usize, seed: u64) -> (f64, f64) {
@@ -345,7 +326,7 @@ fn monte_carlo_density(f: &microfrep::fill::Filled, n: usize, seed: u64) -> (f64
 
 #[test]
 fn the_issues_bone_fills_agree_with_independent_measurements() {
-    let (Some(hip), Some(femur)) = (bone("hip.stl"), bone("femur.stl")) else {
+    let (Some(hip), Some(femur)) = (common::bone("hip.stl"), common::bone("femur.stl")) else {
         return;
     };
     // The hip with a 0.25 Schwarz D sheet of 6 mm cells in a 1.5 mm skin (a
