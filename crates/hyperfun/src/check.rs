@@ -90,9 +90,8 @@ pub fn check_with(
     for (name, f) in &opts.fields {
         registry.register_field(name, f.clone());
     }
-    let table = |name: &str| crate::standard_signature(&registry, name);
     let (program, warnings) =
-        crate::parse_with_table(src, file, crate::Options::default(), &table)?;
+        crate::parse_with_registry(src, file, crate::Options::default(), &registry)?;
     let program = Arc::new(program);
     let mut items = warnings.items;
     let mut unlocated = Vec::new();

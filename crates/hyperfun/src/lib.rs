@@ -68,9 +68,7 @@ pub fn parse_with(
     file: &str,
     options: Options,
 ) -> Result<(ast::Program, Diagnostics), Diagnostics> {
-    let registry = library::Registry::standard();
-    let table = |name: &str| standard_signature(&registry, name);
-    parse_with_table(src, file, options, &table)
+    parse_with_registry(src, file, options, &library::Registry::standard())
 }
 
 /// Parameters of a built-in (SPEC section 7) or library function.
@@ -84,6 +82,18 @@ fn standard_signature(registry: &library::Registry, name: &str) -> Option<Vec<Pa
         library::Kind::R => ParamKind::Real,
     };
     Some(f.kinds.iter().map(kind).collect())
+}
+
+/// Parses with the functions of `registry` (the standard library plus any
+/// bound data fields) and the built-ins as the function table.
+pub fn parse_with_registry(
+    src: &str,
+    file: &str,
+    options: Options,
+    registry: &library::Registry,
+) -> Result<(ast::Program, Diagnostics), Diagnostics> {
+    let table = |name: &str| standard_signature(registry, name);
+    parse_with_table(src, file, options, &table)
 }
 
 /// Parses with a caller-supplied function table (which names are functions
@@ -130,8 +140,7 @@ pub fn load_with_options(src: &str, file: &str, opts: &LoadOptions) -> Result<Mo
     for (name, f) in &opts.fields {
         registry.register_field(name, f.clone());
     }
-    let table = |name: &str| standard_signature(&registry, name);
-    let (program, _) = parse_with_table(src, file, Options::default(), &table)?;
+    let (program, _) = parse_with_registry(src, file, Options::default(), &registry)?;
     let program = std::sync::Arc::new(program);
     lower::load_program_with(program, opts.object.as_deref(), &opts.params, &registry).map_err(
         |e| {

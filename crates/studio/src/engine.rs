@@ -112,29 +112,6 @@ fn diag_of(d: &Diagnostic) -> Diag {
     }
 }
 
-/// The parameter kinds of a function HyperFun knows: a built-in, or one of
-/// `registry` (the standard library plus bound data fields). What
-/// `microfrep_hyperfun::parse_with` does with the standard registry only.
-fn signature(
-    registry: &microfrep_hyperfun::library::Registry,
-    name: &str,
-) -> Option<Vec<microfrep_hyperfun::ParamKind>> {
-    use microfrep_hyperfun::{library::Kind, ParamKind};
-    if let Some(&(_, n)) = lower::ops::BUILTINS.iter().find(|(b, _)| *b == name) {
-        return Some(vec![ParamKind::Real; n]);
-    }
-    let f = registry.get(name)?;
-    Some(
-        f.kinds
-            .iter()
-            .map(|k| match k {
-                Kind::A => ParamKind::Array,
-                Kind::R => ParamKind::Real,
-            })
-            .collect(),
-    )
-}
-
 /// Parses and lowers object `object` (default `my_model`, else the first)
 /// of `src` with `a[1..] = params` and the data `fields` callable as
 /// `NAME(x)`; the other objects are lowered too, as `microfrep check` does,
@@ -153,8 +130,7 @@ pub fn load(
     for (name, f) in fields {
         registry.register_field(name, f.clone());
     }
-    let table = |name: &str| signature(&registry, name);
-    let parsed = microfrep_hyperfun::parse_with_table(src, file, options, &table);
+    let parsed = microfrep_hyperfun::parse_with_registry(src, file, options, &registry);
     let (program, mut items) = match parsed {
         Ok((p, warnings)) => (Arc::new(p), warnings.items),
         Err(d) => {
