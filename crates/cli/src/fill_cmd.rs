@@ -215,7 +215,7 @@ pub fn run(a: FillArgs) -> Result<()> {
             microfrep::io::atomic::register_input(p);
         }
         let f = fill(&part, &opts, &progress)?;
-        let r = f.measure(&MeasureOptions::default(), &progress)?;
+        let r = f.measure_local(&MeasureOptions::default(), &progress)?;
         Ok((f, r))
     })();
     bar.finish_and_clear();
@@ -241,69 +241,107 @@ pub fn run(a: FillArgs) -> Result<()> {
         }
     }
     let b = f.bounds;
-    let written = match kind {
-        Output::HyperFun => {
-            let text = f.hyperfun()?;
-            microfrep::io::atomic::write_file(&a.output, text.as_bytes())?;
-            serde_json::json!({ "kind": "hyperfun", "binding": f.binding(), "bytes": text.len() })
-        }
-        Output::BeamLattice => {
-            let Some(rad) = f.design.strut_radius else {
-                bail!("a beam lattice takes a constant --density (or write --triangles)")
-            };
-            let Structure::Struts(k) = structure else {
-                unreachable!("beam lattices are struts")
-            };
-            let n = mesh_resolution(&a, thinnest_beam(&r, a.cell), b)?;
-            let (beams, nodes) = microfrep::export::beam_lattice_fill_3mf(
-                &f.core,
-                f.skin.as_ref(),
-                k,
-                a.cell,
-                rad,
-                b,
-                n,
-                &a.output,
-            )?;
-            serde_json::json!({
-                "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": rad,
-                "skin_mesh": f.skin.is_some(), "resolution": n,
-                "bytes": file_size(&a.output),
-            })
-        }
+    let write = |r: &mut FillReport| -> Result<serde_json::Value> {
+        Ok(match kind {
+            Output::HyperFun => {
+                let text = f.hyperfun()?;
+                microfrep::io::atomic::write_file(&a.output, text.as_bytes())?;
+                serde_json::json!({ "kind": "hyperfun", "binding": f.binding(), "bytes": text.len() })
+            }
+            Output::BeamLattice => {
+                let Some(rad) = f.design.strut_radius else {
+                    bail!("a beam lattice takes a constant --density (or write --triangles)")
+                };
+                let Structure::Struts(k) = structure else {
+                    unreachable!("beam lattices are struts")
+                };
+                let n = mesh_resolution(&a, thinnest_beam(&r, a.cell), b)?;
+                let (beams, nodes) = microfrep::export::beam_lattice_fill_3mf(
+                    &f.core,
+                    f.skin.as_ref(),
+                    k,
+                    a.cell,
+                    rad,
+                    b,
+                    n,
+                    &a.output,
+                )?;
+                serde_json::json!({
+                    "kind": "beam-lattice", "beams": beams, "nodes": nodes, "radius": rad,
+                    "skin_mesh": f.skin.is_some(), "resolution": n,
+                    "bytes": file_size(&a.output),
+                })
+            }
+            Output::Mesh => {
+                let n = mesh_resolution(&a, thinnest(&r), b)?;
+                if let Some(area) = r.surface_estimate() {
+                    check_mesh_size(area, b, n)?;
+                }
+                let (s, shells) = mesh_checked(&a, &f, b, n)?;
+                if let Some(t) = &r.thinnest {
+                    if t.min < 2.0 * s.cell {
+                        r.notes.push(format!(
+                            "walls down to {} mm (at {}) are under two mesh cells of {} mm: the \
+                         mesh may open them; --resolution {} shows them",
+                            num(t.min),
+                            point(&t.at),
+                            num(s.cell),
+                            (n as f64 * 2.0 * s.cell / t.min).ceil() as usize
+                        ));
+                    }
+                }
+                let mut j = serde_json::json!({
+                    "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges,
+                    "volume": s.volume, "resolution": n, "cell": s.cell, "shells": shells,
+                    "bytes": file_size(&a.output),
+                });
+                if let Some(v) = &volume {
+                    let res = crate::mesh_cmd::apply_volume(v, &a.output, &f.model, b, &a.run)?;
+                    j["volumetric"] = crate::mesh_cmd::volume_json(&res);
+                }
+                j
+            }
+            Output::Slices => {
+                let grid = microfrep::fab::SliceGrid::new(b.min, b.max, a.layer, a.pixel)?;
+                let format = slice_format.expect("parsed above");
+                microfrep::fab::write_stack(&f.model, &grid, &format, &a.output, &|| {})?;
+                serde_json::json!({ "kind": "slices", "layers": grid.layers })
+            }
+        })
+    };
+    // The whole part's connectivity does not change what is written, so
+    // it is measured beside the writing (each uses the threads the other
+    // leaves idle) and the report waits for both. It measures the part's
+    // volume, which the mesh's size check needs: where the part's box
+    // alone does not clear the mesh, it is measured first.
+    let clear = match kind {
         Output::Mesh => {
             let n = mesh_resolution(&a, thinnest(&r), b)?;
-            check_mesh_size(&r, b, n)?;
-            let (s, shells) = mesh_checked(&a, &f, b, n)?;
-            if let Some(t) = &r.thinnest {
-                if t.min < 2.0 * s.cell {
-                    r.notes.push(format!(
-                        "walls down to {} mm (at {}) are under two mesh cells of {} mm: the \
-                         mesh may open them; --resolution {} shows them",
-                        num(t.min),
-                        point(&t.at),
-                        num(s.cell),
-                        (n as f64 * 2.0 * s.cell / t.min).ceil() as usize
-                    ));
-                }
-            }
-            let mut j = serde_json::json!({
-                "kind": "mesh", "triangles": s.triangles, "bad_edges": s.bad_edges,
-                "volume": s.volume, "resolution": n, "cell": s.cell, "shells": shells,
-                "bytes": file_size(&a.output),
-            });
-            if let Some(v) = &volume {
-                let res = crate::mesh_cmd::apply_volume(v, &a.output, &f.model, b, &a.run)?;
-                j["volumetric"] = crate::mesh_cmd::volume_json(&res);
-            }
-            j
+            let box_volume: f64 = b.size().iter().product();
+            check_mesh_size(r.area_per_volume * box_volume, b, n).is_ok()
         }
-        Output::Slices => {
-            let grid = microfrep::fab::SliceGrid::new(b.min, b.max, a.layer, a.pixel)?;
-            let format = slice_format.expect("parsed above");
-            microfrep::fab::write_stack(&f.model, &grid, &format, &a.output, &|| {})?;
-            serde_json::json!({ "kind": "slices", "layers": grid.layers })
-        }
+        _ => true,
+    };
+    let conn_progress = |_: &str, _: u64, _: u64| {};
+    let written = if clear {
+        let mut conn = r.clone();
+        let base = r.notes.len();
+        let (written, measured) = rayon::join(
+            || write(&mut r),
+            || f.add_connectivity(&mut conn, &MeasureOptions::default(), &conn_progress),
+        );
+        let written = written?;
+        measured.with_context(|| format!("fill {}", a.part.model))?;
+        r.connectivity = conn.connectivity;
+        r.sealed = conn.sealed;
+        r.seconds = conn.seconds;
+        // Notes of the connectivity come after those of the writing.
+        r.notes.extend(conn.notes.drain(base..));
+        written
+    } else {
+        f.add_connectivity(&mut r, &MeasureOptions::default(), &conn_progress)
+            .with_context(|| format!("fill {}", a.part.model))?;
+        write(&mut r)?
     };
     if a.run.json {
         println!("{}", report_json(&a, &f, &r, written));
@@ -398,10 +436,9 @@ const CHECK_BYTES_PER_TRIANGLE: f64 = 150.0;
 /// Refuses, before any work, a mesh that would not fit this machine: its
 /// triangles estimated from the infill's measured surface and the part's
 /// volume.
-fn check_mesh_size(r: &FillReport, b: Bounds, n: usize) -> Result<()> {
-    let Some(area) = r.surface_estimate() else {
-        return Ok(());
-    };
+/// Refuses a mesh of `n` cells on the longest side of `b` over a surface
+/// of `area` when it would not fit in memory.
+fn check_mesh_size(area: f64, b: Bounds, n: usize) -> Result<()> {
     let longest = b.size().iter().copied().fold(0.0, f64::max);
     let h = longest / n as f64;
     let triangles = TRIANGLES_PER_CELL_AREA * area / (h * h);

@@ -311,38 +311,61 @@ impl Field for GridField {
     /// The value alone (no gradient; the same bits as [`Field::eval`]):
     /// the hot path of meshing and analysis over a cached part.
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
+        // In chunks: first every point's cell and weights (a branch-free
+        // loop the compiler vectorises), then the eight corners of each.
+        // The clamps give `locate`'s cells and weights bit for bit (NaN
+        // and anything below the box go to cell 0 at weight 0, anything
+        // above to the last cell at weight 1).
+        const CHUNK: usize = 64;
         let h: [f64; 3] = std::array::from_fn(|a| self.spacing(a));
-        let [nx, ny, nz] = self.dims;
-        let (sx, sy) = (1, nx);
-        let sz = nx * ny;
-        let locate = |a: usize, v: f64, n: usize| -> (usize, f64) {
-            let t = (v - self.min[a]) / h[a];
-            if t.is_nan() || t <= 0.0 {
-                (0, 0.0)
-            } else if t >= (n - 1) as f64 {
-                (n - 2, 1.0)
-            } else {
-                let i = (t.floor() as usize).min(n - 2);
-                (i, t - i as f64)
-            }
-        };
+        let top: [f64; 3] = std::array::from_fn(|a| (self.dims[a] - 1) as f64);
+        let last: [f64; 3] = std::array::from_fn(|a| (self.dims[a] - 2) as f64);
+        let [nx, ny, _] = self.dims;
+        let (sx, sy, sz) = (1, nx, nx * ny);
         let v = &self.values;
-        for q in 0..out.len() {
-            let (px, py, pz) = (x[q] as f64, y[q] as f64, z[q] as f64);
-            if px.is_nan() || py.is_nan() || pz.is_nan() {
-                out[q] = f32::NAN;
-                continue;
+        debug_assert!(self.dims.iter().all(|&n| n >= 2));
+        let n = out.len().min(x.len()).min(y.len()).min(z.len());
+        let mut base = [0usize; CHUNK];
+        let mut wt = [[0.0f64; CHUNK]; 3];
+        for start in (0..n).step_by(CHUNK) {
+            let m = CHUNK.min(n - start);
+            let coords = [
+                &x[start..start + m],
+                &y[start..start + m],
+                &z[start..start + m],
+            ];
+            let mut cell = [[0.0f64; CHUNK]; 3];
+            for a in 0..3 {
+                for q in 0..m {
+                    // `max` drops a NaN.
+                    let t = ((coords[a][q] as f64 - self.min[a]) / h[a])
+                        .max(0.0)
+                        .min(top[a]);
+                    let i = t.floor().min(last[a]);
+                    cell[a][q] = i;
+                    wt[a][q] = t - i;
+                }
             }
-            let (i, u) = locate(0, px, nx);
-            let (j, w1) = locate(1, py, ny);
-            let (k, w2) = locate(2, pz, nz);
-            let b = i * sx + j * sy + k * sz;
-            let lerp = |a: f64, c: f64, t: f64| a + (c - a) * t;
-            let c00 = lerp(v[b], v[b + sx], u);
-            let c10 = lerp(v[b + sy], v[b + sy + sx], u);
-            let c01 = lerp(v[b + sz], v[b + sz + sx], u);
-            let c11 = lerp(v[b + sz + sy], v[b + sz + sy + sx], u);
-            out[q] = lerp(lerp(c00, c10, w1), lerp(c01, c11, w1), w2) as f32;
+            for q in 0..m {
+                base[q] =
+                    cell[0][q] as usize * sx + cell[1][q] as usize * sy + cell[2][q] as usize * sz;
+            }
+            for q in 0..m {
+                let b = base[q];
+                // Every cell index is at most dims - 2, so the far corner
+                // `b + sx + sy + sz` is inside `values`.
+                debug_assert!(b + sx + sy + sz < v.len());
+                let at = |o: usize| unsafe { *v.get_unchecked(b + o) };
+                let lerp = |a: f64, c: f64, t: f64| a + (c - a) * t;
+                let (u, w1, w2) = (wt[0][q], wt[1][q], wt[2][q]);
+                let c00 = lerp(at(0), at(sx), u);
+                let c10 = lerp(at(sy), at(sy + sx), u);
+                let c01 = lerp(at(sz), at(sz + sx), u);
+                let c11 = lerp(at(sz + sy), at(sz + sy + sx), u);
+                let r = lerp(lerp(c00, c10, w1), lerp(c01, c11, w1), w2) as f32;
+                let nan = coords[0][q].is_nan() || coords[1][q].is_nan() || coords[2][q].is_nan();
+                out[start + q] = if nan { f32::NAN } else { r };
+            }
         }
     }
 }

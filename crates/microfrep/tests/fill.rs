@@ -353,13 +353,15 @@ fn the_issues_bone_fills_agree_with_independent_measurements() {
     // The sheet's thickness: chords along the infill's gradient through
     // random points of the sheet, bisected to its two faces.
     let mut inf = f.infill.point();
-    let mut core = f.core.point();
+    // Points 3 mm below the skin, by the mesh's exact distance (the fill's
+    // cached depth is clamped a little below the skin).
+    let mut depth = part.shape.point();
     let mut chords = Vec::new();
     for p in random_points(f.bounds, 4_000_000, 11) {
         if chords.len() >= 400 {
             break;
         }
-        if core.eval(p) < 3.0 || inf.eval(p) <= 0.0 {
+        if depth.eval(p) < 1.5 + 3.0 || inf.eval(p) <= 0.0 {
             continue;
         }
         let e = 1e-4;

@@ -161,6 +161,22 @@ pub(crate) fn stl(
     Ok(engine::stl_bytes(&m)?)
 }
 
+/// The facade's fill of a part ([`crate::fill`]), in an export slot under
+/// the job time limit.
+pub(crate) fn fill(
+    sh: &Shared,
+    req: &crate::fill::Request,
+    snap: Option<&Snapshot>,
+    client: Option<Watch>,
+) -> Result<serde_json::Value, StudioError> {
+    let _slot = Slot::take(sh)?;
+    let g = limit_guard(sh, client);
+    let limit = sh.sessions.config().memory_limit;
+    guarded(&g, |check| {
+        crate::fill::run(&sh.root, req, snap, limit, check)
+    })
+}
+
 fn file_stem(file: &str) -> String {
     let base = file.rsplit('/').next().unwrap_or(file);
     let stem = base.strip_suffix(".hf").unwrap_or(base);

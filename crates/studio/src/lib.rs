@@ -22,7 +22,9 @@
 //! coarse to fine ([`ServeOptions::levels`]) and analyses it quickly, then
 //! refined once the model has settled. A newer edit stops the older work
 //! within one brick or layer. Every call into the other microfrep crates
-//! lives in [`engine`].
+//! lives in [`engine`], but the fill (`POST /api/fill`), which calls the
+//! facade's `fill` as the CLI and Python do and answers with the filled
+//! model's HyperFun source and its measured report.
 //!
 //! Endpoints: every route is in [`ROUTES`] (which the router itself looks
 //! up) and documented in the crate's `API.md`, which the server serves at
@@ -62,6 +64,7 @@ mod conn;
 pub mod engine;
 mod error;
 mod export;
+mod fill;
 pub mod hints;
 mod parts;
 pub mod paths;

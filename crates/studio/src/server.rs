@@ -532,6 +532,7 @@ pub const ROUTES: &[Route] = &[
     get("/api/slices.zip", slices_zip),
     post("/api/slices", slices_dir),
     post("/api/save", save),
+    post("/api/fill", fill_part),
     get("/api/files", files),
     get("/api/file", file),
 ];
@@ -824,6 +825,27 @@ fn save(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> 
     let c = paths::writable(&sh.root, path, false)?;
     export::write_atomic(&c.full, source.as_bytes())?;
     Ok(Reply::json(json!({ "saved": c.relative })))
+}
+
+fn fill_part(rq: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {
+    let v = body_json(rq)?;
+    let s = sh.sessions.get(str_field(&v, "session")?)?;
+    let req = crate::fill::parse(&v)?;
+    let snap = match req.part {
+        crate::fill::PartSpec::Current => {
+            let gen = field(&v, "gen")?
+                .as_u64()
+                .ok_or_else(|| StudioError::Request("gen must be a number".into()))?;
+            Some(s.snapshot(gen)?)
+        }
+        crate::fill::PartSpec::File(_) => None,
+    };
+    Ok(Reply::json(export::fill(
+        sh,
+        &req,
+        snap.as_ref(),
+        watch(rq, sh),
+    )?))
 }
 
 fn files(_: &mut Request, sh: &Shared, _: &Query) -> Result<Reply, StudioError> {

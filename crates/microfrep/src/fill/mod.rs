@@ -770,6 +770,26 @@ impl Filled {
     ) -> Result<FillReport, FillError> {
         report::measure(self, opts, progress)
     }
+
+    /// All but the connectivity ([`report::measure_local`]).
+    pub fn measure_local(
+        &self,
+        opts: &MeasureOptions,
+        progress: Progress,
+    ) -> Result<FillReport, FillError> {
+        report::measure_local(self, opts, progress)
+    }
+
+    /// The connectivity, into a report from [`Filled::measure_local`]
+    /// ([`report::add_connectivity`]).
+    pub fn add_connectivity(
+        &self,
+        r: &mut FillReport,
+        opts: &MeasureOptions,
+        progress: Progress,
+    ) -> Result<(), FillError> {
+        report::add_connectivity(self, r, opts, progress)
+    }
 }
 
 /// The density in words, for headers and reports.

@@ -124,8 +124,8 @@ impl Part {
             // Inside, the depth must be right down to the cap; outside only
             // the sign matters (and a few steps of distance, for the
             // mesher's and the skin measure's samples near the surface).
-            let band = needed.min(cap) + 4.0 * h;
-            let band_out = 4.0 * h;
+            let band = needed.min(cap) + 2.0 * h;
+            let band_out = 2.0 * h;
             let cached = cache_field(
                 self.shape.value(),
                 &self.bounds,
@@ -290,9 +290,28 @@ fn cache_field(
     let hi: [f64; 3] = std::array::from_fn(|a| lo[a] + (dims[a] - 1) as f64 * h);
     let tape = Tape::new(f);
     const BR: usize = 8;
+    const SUB: usize = BR / 2;
     let nb: [usize; 3] = std::array::from_fn(|a| dims[a].div_ceil(BR));
     let total = nb[0] * nb[1] * nb[2];
     let done = std::sync::atomic::AtomicU64::new(0);
+    // The clamped value of the nodes `i0 + r[0] .. i0 + r[1]` where their
+    // interval decides it.
+    let decided = |ie: &mut IntervalEval, i0: [usize; 3], r: [[usize; 3]; 2]| -> Option<f64> {
+        let iv = |a: usize| {
+            Interval::new(
+                lo[a] + (i0[a] + r[0][a]) as f64 * h,
+                lo[a] + (i0[a] + r[1][a] - 1) as f64 * h,
+            )
+        };
+        let v = ie.eval(iv(0), iv(1), iv(2));
+        if !v.may_be_nan() && v.lo >= band {
+            Some(band)
+        } else if v.hi <= -band_out {
+            Some(-band_out)
+        } else {
+            None
+        }
+    };
     let bricks: Vec<(usize, Vec<f64>)> = (0..total)
         .into_par_iter()
         .map_init(
@@ -301,48 +320,63 @@ fn cache_field(
                 let bi = [k % nb[0], (k / nb[0]) % nb[1], k / (nb[0] * nb[1])];
                 let i0: [usize; 3] = std::array::from_fn(|a| bi[a] * BR);
                 let n: [usize; 3] = std::array::from_fn(|a| BR.min(dims[a] - i0[a]));
-                let iv = |a: usize| {
-                    Interval::new(
-                        lo[a] + i0[a] as f64 * h,
-                        lo[a] + (i0[a] + n[a] - 1) as f64 * h,
-                    )
-                };
-                let r = ie.eval(iv(0), iv(1), iv(2));
                 let count = n[0] * n[1] * n[2];
                 let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 if d % 64 == 0 {
                     progress("sampling the part", d, total as u64);
                 }
-                if !r.may_be_nan() && r.lo >= band {
-                    return (k, vec![band; count]);
+                // The brick, then its octants (a brick is wider than the
+                // band, so most of a surface brick lies beyond it).
+                let whole = [[0usize; 3], n];
+                if let Some(v) = decided(&mut *ie, i0, whole) {
+                    return (k, vec![v; count]);
                 }
-                if r.hi <= -band_out {
-                    return (k, vec![-band_out; count]);
-                }
+                let mut vals = vec![f64::NAN; count];
                 let mut x = Vec::with_capacity(count);
                 let mut y = Vec::with_capacity(count);
                 let mut z = Vec::with_capacity(count);
-                for c in 0..n[2] {
-                    for bj in 0..n[1] {
-                        for ai in 0..n[0] {
-                            x.push((lo[0] + (i0[0] + ai) as f64 * h) as f32);
-                            y.push((lo[1] + (i0[1] + bj) as f64 * h) as f32);
-                            z.push((lo[2] + (i0[2] + c) as f64 * h) as f32);
+                let mut at = Vec::with_capacity(count);
+                let parts: Vec<[[usize; 3]; 2]> = (0..8)
+                    .filter_map(|o: usize| {
+                        let s0: [usize; 3] =
+                            std::array::from_fn(|a| if o >> a & 1 == 1 { SUB } else { 0 });
+                        let s1: [usize; 3] =
+                            std::array::from_fn(
+                                |a| if o >> a & 1 == 1 { n[a] } else { SUB.min(n[a]) },
+                            );
+                        (0..3).all(|a| s0[a] < s1[a]).then_some([s0, s1])
+                    })
+                    .collect();
+                for [s0, s1] in parts {
+                    let fixed = decided(&mut *ie, i0, [s0, s1]);
+                    for c in s0[2]..s1[2] {
+                        for bj in s0[1]..s1[1] {
+                            for ai in s0[0]..s1[0] {
+                                let q = ai + n[0] * (bj + n[1] * c);
+                                match fixed {
+                                    Some(v) => vals[q] = v,
+                                    None => {
+                                        x.push((lo[0] + (i0[0] + ai) as f64 * h) as f32);
+                                        y.push((lo[1] + (i0[1] + bj) as f64 * h) as f32);
+                                        z.push((lo[2] + (i0[2] + c) as f64 * h) as f32);
+                                        at.push(q);
+                                    }
+                                }
+                            }
                         }
                     }
                 }
-                let mut out = vec![0.0f32; count];
-                be.eval(&x, &y, &z, &mut out);
-                let vals = out
-                    .into_iter()
-                    .map(|v| {
-                        if v.is_nan() {
+                if !at.is_empty() {
+                    let mut out = vec![0.0f32; at.len()];
+                    be.eval(&x, &y, &z, &mut out);
+                    for (&q, v) in at.iter().zip(out) {
+                        vals[q] = if v.is_nan() {
                             -band_out
                         } else {
                             (v as f64).clamp(-band_out, band)
-                        }
-                    })
-                    .collect();
+                        };
+                    }
+                }
                 (k, vals)
             },
         )

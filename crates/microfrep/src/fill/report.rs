@@ -199,6 +199,20 @@ pub fn measure(
     opts: &MeasureOptions,
     progress: Progress,
 ) -> Result<FillReport, FillError> {
+    let mut r = measure_local(f, opts, progress)?;
+    add_connectivity(f, &mut r, opts, progress)?;
+    Ok(r)
+}
+
+/// Everything [`measure`] measures but the whole part's connectivity
+/// (`connectivity` and `sealed` stay `None`): the figures that decide how
+/// the part is written, so that [`add_connectivity`] can run beside the
+/// writing.
+pub fn measure_local(
+    f: &Filled,
+    opts: &MeasureOptions,
+    progress: Progress,
+) -> Result<FillReport, FillError> {
     opts.check()?;
     let t0 = Instant::now();
     let cell = f.options.cell;
@@ -297,26 +311,6 @@ pub fn measure(
         (Some(s), Some(t)) => Some(skin_rays(f, s, t, opts.rays)?),
         _ => None,
     };
-    // The connectivity grid must resolve the skin too (it decides whether
-    // the skin seals the pores).
-    let resolve = f.options.skin.map_or(feature, |t| feature.min(t));
-    let connectivity = connectivity(f, resolve, opts.connectivity_voxels, progress)?;
-    let sealed = f.skin.as_ref().map(|_| connectivity.open_fraction < 1e-3);
-    if !connectivity.resolved {
-        notes.push(format!(
-            "connectivity measured at {:.4} voxels, more than half the thinnest feature \
-             ({resolve:.4}): the part is too large for a finer grid within the budget",
-            connectivity.voxel
-        ));
-    }
-    if connectivity.solid_components > 1 && connectivity.loose_fraction > 1e-3 {
-        notes.push(format!(
-            "the solid falls apart into {} pieces ({:.2} % of its volume outside the largest): \
-             loose pieces cannot be printed",
-            connectivity.solid_components,
-            100.0 * connectivity.loose_fraction
-        ));
-    }
     if let Some(s) = &skin {
         if s.unbounded > 0 {
             notes.push(format!(
@@ -341,11 +335,50 @@ pub fn measure(
         thinnest,
         pores,
         skin,
-        connectivity: Some(connectivity),
-        sealed,
+        connectivity: None,
+        sealed: None,
         notes,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// Measures the whole part's connectivity into `r` (from
+/// [`measure_local`]): components, open and closed pores, whether the
+/// skin seals them, with their notes; its time is added to `r.seconds`.
+pub fn add_connectivity(
+    f: &Filled,
+    r: &mut FillReport,
+    opts: &MeasureOptions,
+    progress: Progress,
+) -> Result<(), FillError> {
+    opts.check()?;
+    let t0 = Instant::now();
+    let feature = r.feature;
+    let notes = &mut r.notes;
+    // The connectivity grid must resolve the skin too (it decides whether
+    // the skin seals the pores).
+    let resolve = f.options.skin.map_or(feature, |t| feature.min(t));
+    let connectivity = connectivity(f, resolve, opts.connectivity_voxels, progress)?;
+    let sealed = f.skin.as_ref().map(|_| connectivity.open_fraction < 1e-3);
+    if !connectivity.resolved {
+        notes.push(format!(
+            "connectivity measured at {:.4} voxels, more than half the thinnest feature \
+             ({resolve:.4}): the part is too large for a finer grid within the budget",
+            connectivity.voxel
+        ));
+    }
+    if connectivity.solid_components > 1 && connectivity.loose_fraction > 1e-3 {
+        notes.push(format!(
+            "the solid falls apart into {} pieces ({:.2} % of its volume outside the largest): \
+             loose pieces cannot be printed",
+            connectivity.solid_components,
+            100.0 * connectivity.loose_fraction
+        ));
+    }
+    r.connectivity = Some(connectivity);
+    r.sealed = sealed;
+    r.seconds += t0.elapsed().as_secs_f64();
+    Ok(())
 }
 
 /// Ratio estimate `sum a / sum b` with twice its standard error plus the
@@ -588,7 +621,8 @@ fn skin_rays(f: &Filled, skin: &Shape, t: f64, rays: usize) -> Result<SkinFigure
     for k in 1..=(400 * rays as u64) {
         let u = super::part::halton3(k);
         let mut p: [f64; 3] = std::array::from_fn(|a| b.min[a] + u[a] * (b.max[a] - b.min[a]));
-        if depth.eval(p).abs() > band {
+        // (`>=`: a cached part's depth is clamped, at no less than the band.)
+        if depth.eval(p).abs() >= band {
             continue;
         }
         let mut ok = false;
