@@ -100,6 +100,19 @@ pub enum Dim {
 /// A custom split rule: direction and percentage per cell (T-mesh).
 pub type SplitRule = Arc<dyn Fn(&CellInfo) -> Split + Send + Sync>;
 
+/// What the size argument of a build measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SizeMeasure {
+    /// The cell edge (the requested pore size), in model units.
+    #[default]
+    Edge,
+    /// The paper's cell area (2D) or volume (3D) per pore, `m / P` of
+    /// Sec. 4.3: the part's area or volume `m` over the number of pores
+    /// `P` wanted. Cells are refined until their area / volume is at most
+    /// this (the edge is its square / cube root).
+    PerPore,
+}
+
 /// Build options.
 #[derive(Clone)]
 pub struct Options {
@@ -119,8 +132,37 @@ pub struct Options {
     /// [1, 4/3); above 1 pores cut the cell sides and merge with their
     /// neighbours. 3D accepts [4/3, 2]: the derived points then stay on the
     /// parent's edges (`t` in [0, 1]) from the face-touching pore to the
-    /// edge-touching one.
+    /// edge-touching one. In 3D the scale does not change the pores'
+    /// shapes, only where their derived points lie: it cannot open them
+    /// below 0.6274 (see [`crate::pore3`]); [`Options::opening`] does.
     pub parent_scale: Option<f64>,
+    /// 2D: the weight of the corner control point of every arc of the pore
+    /// curve (rational quadratic arcs, the NURBS form of the paper's
+    /// pores; see [`crate::curve`]). 1 (the default) is the polynomial
+    /// B-spline; below 1 the pores are rounder (`sqrt(2)/2` makes the
+    /// regular pore a circle), above 1 squarer. Any finite weight above 0;
+    /// the porosity is met exactly whatever the weight (heavier corners
+    /// with a parent scale above 1 reach the cell corners sooner: the
+    /// largest pore of parent scale `k` covers them once
+    /// `k (1/2 + w) / (1 + w) >= 1`). 3D accepts only 1:
+    /// the Doo-Sabin surface is the uniform biquadratic B-spline surface
+    /// on the derived polyhedron (all weights 1), and it has no rational
+    /// form.
+    pub weight: f64,
+    /// 3D: how far an opened pore reaches past its cell's face centres,
+    /// relative to the half cell, where the Doo-Sabin pore alone would not
+    /// reach the faces (targets below its face-touching porosity, 0.6274).
+    /// Such a pore keeps the reach and meets its porosity by its shape
+    /// instead, blended from the Doo-Sabin surface towards a sphere and a
+    /// star ([`crate::pore3::blend`]): with the default 0.05 every pore
+    /// opens into its six neighbours from porosity
+    /// [`crate::pore3::open_from`]`(0.05)` (0.4559) up, which covers the
+    /// paper's 52.36 % to 96.5 %. 0 gives the plain construction (closed
+    /// pores below 0.6274). In [0, 0.25].
+    pub opening: f64,
+    /// What the size argument measures: the cell edge (default) or the
+    /// cell area / volume per pore.
+    pub size_measure: SizeMeasure,
     /// Most cells the subdivision may make.
     pub max_cells: usize,
     /// Most bytes the field may hold (the 3D pores' tables take about
@@ -137,6 +179,9 @@ impl Default for Options {
             split_rule: None,
             irregularity: 0.15,
             parent_scale: None,
+            weight: 1.0,
+            opening: pore3::OPENING,
+            size_measure: SizeMeasure::Edge,
             max_cells: 1 << 21,
             memory_limit: 4 << 30,
         }
@@ -151,6 +196,9 @@ impl std::fmt::Debug for Options {
             .field("split_rule", &self.split_rule.as_ref().map(|_| ".."))
             .field("irregularity", &self.irregularity)
             .field("parent_scale", &self.parent_scale)
+            .field("weight", &self.weight)
+            .field("opening", &self.opening)
+            .field("size_measure", &self.size_measure)
             .field("max_cells", &self.max_cells)
             .field("memory_limit", &self.memory_limit)
             .finish()
@@ -194,6 +242,10 @@ pub enum PoreShape {
         lambda: f64,
         /// Irregularity used (lower than asked where the rules needed it).
         irregularity: f64,
+        /// Blend of the pore's radial table towards the star shape
+        /// ([`crate::pore3::blend`]): 0 for the Doo-Sabin pore itself,
+        /// above 0 for a pore opened by [`Options::opening`].
+        roundness: f64,
     },
 }
 
@@ -226,8 +278,10 @@ pub struct Built {
     pub regularized: usize,
     /// Porosity range of the construction with these options.
     pub range: (f64, f64),
-    /// 3D: porosity of the regular pore touching the cell faces; above it
-    /// every pore opens into its six neighbours.
+    /// 3D: the lowest porosity at which every pore opens into its six
+    /// neighbours (with [`Options::opening`] 0, that of the regular
+    /// Doo-Sabin pore touching the cell faces, 0.6274; with the default
+    /// opening, 0.4559). Infinite in 2D.
     pub open_above: f64,
 }
 
@@ -250,8 +304,9 @@ pub struct Pores;
 /// cell (besides 0, no pore) for these options.
 pub fn porosity_range(options: &Options) -> Result<(f64, f64), PoreError> {
     let kappa = kappa_of(options)?;
+    check_weight(options)?;
     Ok(match options.dim {
-        Dim::Two => (0.0, pore2::max_porosity(kappa)),
+        Dim::Two => (0.0, pore2::max_porosity_weighted(kappa, options.weight)),
         Dim::Three => pore3::range(kappa),
     })
 }
@@ -291,6 +346,45 @@ fn kappa_of(o: &Options) -> Result<f64, PoreError> {
         });
     }
     Ok(k)
+}
+
+fn check_weight(o: &Options) -> Result<(), PoreError> {
+    let w = o.weight;
+    if !(w.is_finite() && w > 0.0) {
+        return Err(PoreError::Option {
+            name: "weight",
+            value: w,
+            why: "must be a finite number above 0 (1: the polynomial curve)",
+        });
+    }
+    if o.dim == Dim::Three && w != 1.0 {
+        return Err(PoreError::Option {
+            name: "weight",
+            value: w,
+            why: "3D pores take only weight 1 (the Doo-Sabin surface has no rational form)",
+        });
+    }
+    Ok(())
+}
+
+fn check_options(o: &Options) -> Result<(), PoreError> {
+    let sigma = o.irregularity;
+    if !(0.0..=0.5).contains(&sigma) {
+        return Err(PoreError::Option {
+            name: "irregularity",
+            value: sigma,
+            why: "must be in [0, 0.5]",
+        });
+    }
+    check_weight(o)?;
+    if !(0.0..=0.25).contains(&o.opening) {
+        return Err(PoreError::Option {
+            name: "opening",
+            value: o.opening,
+            why: "must be in [0, 0.25]",
+        });
+    }
+    kappa_of(o).map(|_| ())
 }
 
 fn check_bounds(b: [[f64; 3]; 2]) -> Result<(), PoreError> {
@@ -394,14 +488,8 @@ impl Pores {
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<Built, PoreError> {
         check_bounds(bounds)?;
+        check_options(options)?;
         let sigma = options.irregularity;
-        if !(0.0..=0.5).contains(&sigma) {
-            return Err(PoreError::Option {
-                name: "irregularity",
-                value: sigma,
-                why: "must be in [0, 0.5]",
-            });
-        }
         let kappa = kappa_of(options)?;
         let range = porosity_range(options)?;
         let dim = match options.dim {
@@ -411,7 +499,17 @@ impl Pores {
         let part_tape = Tape::new(part);
         let size_s = Sampler::new(&size);
         let size_fn = std::cell::RefCell::new(size_s.evaluator());
-        let size_eval = |p: [f64; 3]| (size_fn.borrow_mut())(p);
+        let per_pore = options.size_measure == SizeMeasure::PerPore;
+        let size_eval = |p: [f64; 3]| {
+            let v = (size_fn.borrow_mut())(p);
+            // Area / volume per pore to the cell edge (bad values pass
+            // through to the size check unchanged).
+            if per_pore && v > 0.0 {
+                v.powf(1.0 / dim as f64)
+            } else {
+                v
+            }
+        };
         let tree = Tree::build(&Params {
             dim,
             bounds,
@@ -489,7 +587,7 @@ impl Pores {
                     .zip(&targets)
                     .enumerate()
                     .map(|(i, (c, &target))| {
-                        let out = solve_2d(c, target, kappa, sigma, seed, i);
+                        let out = solve_2d(c, target, kappa, options.weight, sigma, seed, i);
                         tick();
                         out
                     })
@@ -510,7 +608,7 @@ impl Pores {
                     .zip(&targets)
                     .enumerate()
                     .map(|(i, (c, &target))| {
-                        let out = solve_3d(c, target, kappa, sigma, seed, i);
+                        let out = solve_3d(c, target, kappa, sigma, options.opening, seed, i);
                         tick();
                         out
                     })
@@ -636,7 +734,7 @@ impl Pores {
         };
         let open_above = match options.dim {
             Dim::Two => f64::INFINITY,
-            Dim::Three => pore3::shared().p_face,
+            Dim::Three => pore3::open_from(options.opening),
         };
         Ok(Built {
             field: Arc::new(field),
@@ -672,7 +770,15 @@ impl Pores {
     }
 }
 
-fn solve_2d(c: &Cell, target: f64, kappa: f64, sigma: f64, seed: u64, i: usize) -> PoreCell {
+fn solve_2d(
+    c: &Cell,
+    target: f64,
+    kappa: f64,
+    weight: f64,
+    sigma: f64,
+    seed: u64,
+    i: usize,
+) -> PoreCell {
     if target == 0.0 {
         return PoreCell {
             cell: *c,
@@ -686,6 +792,7 @@ fn solve_2d(c: &Cell, target: f64, kappa: f64, sigma: f64, seed: u64, i: usize) 
         [c.lo[0], c.lo[1]],
         [c.hi[0], c.hi[1]],
         kappa,
+        weight,
         target,
         sigma,
         &mut rng,
@@ -716,6 +823,7 @@ fn solve_3d(
     target: f64,
     kappa: f64,
     sigma: f64,
+    opening: f64,
     seed: u64,
     i: usize,
 ) -> Result<Solved3, PoreError> {
@@ -733,7 +841,7 @@ fn solve_3d(
     }
     let mut rng = Rng::for_cell(seed, i as u64);
     let u = pore3::face_balanced(|| rng.signed());
-    let s = pore3::solve(target, &u, sigma, kappa).ok_or(PoreError::Pore {
+    let s = pore3::solve(target, &u, sigma, kappa, opening).ok_or(PoreError::Pore {
         cell: i,
         at: c.center(),
         why: "no irregularity down to 0 meets the porosity within the rules",
@@ -749,6 +857,7 @@ fn solve_3d(
                 vertices,
                 lambda: s.lambda,
                 irregularity: s.sigma,
+                roundness: s.roundness,
             },
         },
         Some((s.table, s.lambda)),

@@ -11,6 +11,17 @@
 //! quadrilateral the four corner triangles sum to twice its area, so the
 //! curve encloses exactly 5/6 of its control polygon: the paper's
 //! experimental `alpha = 0.83` of Eq. 6 is [`ALPHA`] = 5/6.
+//!
+//! **Weights.** The arcs may be rational: each arc's middle (corner)
+//! control point carries a weight `w` (the end points, the side
+//! midpoints, weight 1; this is the usual NURBS form of a closed conic
+//! chain, the knots doubled at the midpoints). `w = 1` is the polynomial
+//! B-spline above, `w < 1` pulls the arcs towards their chords (an
+//! ellipse, `w = sqrt(2)/2` on a square the inscribed circle), `w > 1`
+//! towards the corners (a hyperbola). The segment between an arc and its
+//! chord has [`segment_ratio`]`(w)` times its control triangle's area, so
+//! the curve encloses `alpha(w) = (1 + segment_ratio(w)) / 2` of any
+//! four-point control polygon ([`alpha`]; 5/6 at `w = 1`).
 
 /// Ratio of the area enclosed by the closed quadratic B-spline to the area
 /// of its four-point control polygon (exact).
@@ -85,58 +96,185 @@ pub fn shoelace(p: &[P2]) -> f64 {
     0.5 * (0..n).map(|i| cross(p[i], p[(i + 1) % n])).sum::<f64>()
 }
 
-/// A quadratic Bezier arc.
+/// Ratio of the area between a rational quadratic arc (middle weight `w`)
+/// and its chord to the area of its control triangle: 2/3 at `w = 1` (the
+/// parabola), `pi/2 - 1` at `w = sqrt(2)/2` (a quarter circle).
+///
+/// Closed form: with `w = cos(theta)` (`w < 1`) it is
+/// `w (theta / sin(theta) - w) / sin(theta)^2`, with `w = cosh(phi)`
+/// (`w > 1`) `w (w - phi / sinh(phi)) / sinh(phi)^2`; within 0.05 of 1,
+/// where those cancel, the area integral by 32-point Gauss-Legendre
+/// quadrature (the integrand's poles are far from the arc there).
+pub fn segment_ratio(w: f64) -> f64 {
+    if w == 1.0 {
+        return 2.0 / 3.0;
+    }
+    if (w - 1.0).abs() < 0.05 {
+        // The unit arc (0,0) -> (1,1) -> (2,0): triangle area 1; the area
+        // between it and the chord is the integral of y dx.
+        let q = Quad::rational([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]], w);
+        return gauss(|t| {
+            let p = q.at(t);
+            let d = q.tangent(t);
+            p[1] * d[0]
+        });
+    }
+    if w < 1.0 {
+        let th = w.acos();
+        let s = th.sin();
+        w * (th / s - w) / (s * s)
+    } else {
+        let ph = w.acosh();
+        let s = ph.sinh();
+        w * (w - ph / s) / (s * s)
+    }
+}
+
+/// The area the closed chain of rational arcs with middle weight `w`
+/// encloses, over the area of its four-point control polygon (5/6 at
+/// `w = 1`, [`ALPHA`]).
+pub fn alpha(w: f64) -> f64 {
+    if w == 1.0 {
+        ALPHA
+    } else {
+        0.5 * (1.0 + segment_ratio(w))
+    }
+}
+
+/// 32-point Gauss-Legendre quadrature of `f` over [0, 1].
+fn gauss(f: impl Fn(f64) -> f64) -> f64 {
+    use std::sync::OnceLock;
+    static NODES: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    let nodes = NODES.get_or_init(|| {
+        // Roots of the Legendre polynomial P_32 by Newton from Chebyshev
+        // guesses, with their weights.
+        let n = 32;
+        (0..n)
+            .map(|i| {
+                let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+                let mut dp = 0.0;
+                for _ in 0..100 {
+                    let (mut p0, mut p1) = (1.0, x);
+                    for k in 2..=n {
+                        let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
+                        p0 = p1;
+                        p1 = p2;
+                    }
+                    dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                    let dx = p1 / dp;
+                    x -= dx;
+                    if dx.abs() < 1e-16 {
+                        break;
+                    }
+                }
+                let wt = 2.0 / ((1.0 - x * x) * dp * dp);
+                (0.5 * (1.0 + x), 0.5 * wt)
+            })
+            .collect()
+    });
+    nodes.iter().map(|&(x, wt)| wt * f(x)).sum()
+}
+
+/// A quadratic Bezier arc, rational when its middle control point's
+/// weight `w` is not 1 (the end points have weight 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quad {
     /// Start, control and end points.
     pub p: [P2; 3],
+    /// Weight of the control point `p[1]` (1: the polynomial arc).
+    pub w: f64,
 }
 
 impl Quad {
+    /// The polynomial arc with control points `p`.
+    pub fn new(p: [P2; 3]) -> Quad {
+        Quad { p, w: 1.0 }
+    }
+
+    /// The rational arc with control points `p` and middle weight `w > 0`.
+    pub fn rational(p: [P2; 3], w: f64) -> Quad {
+        Quad { p, w }
+    }
+
     /// The straight segment `a..b` as a (degenerate) quadratic.
     pub fn line(a: P2, b: P2) -> Quad {
-        Quad {
-            p: [a, mid(a, b), b],
-        }
+        Quad::new([a, mid(a, b), b])
+    }
+
+    /// The weight function `(1-t)^2 + 2 w t (1-t) + t^2` (positive on
+    /// [0, 1] for `w > 0`).
+    fn denom(&self, t: f64) -> f64 {
+        let s = 1.0 - t;
+        s * s + 2.0 * self.w * s * t + t * t
     }
 
     /// Point at `t`.
     pub fn at(&self, t: f64) -> P2 {
         let [a, b, c] = self.p;
         let s = 1.0 - t;
-        std::array::from_fn(|k| s * s * a[k] + 2.0 * s * t * b[k] + t * t * c[k])
+        if self.w == 1.0 {
+            return std::array::from_fn(|k| s * s * a[k] + 2.0 * s * t * b[k] + t * t * c[k]);
+        }
+        let w = self.w;
+        let d = self.denom(t);
+        std::array::from_fn(|k| (s * s * a[k] + 2.0 * w * s * t * b[k] + t * t * c[k]) / d)
     }
 
     /// Derivative at `t`.
     pub fn tangent(&self, t: f64) -> P2 {
         let [a, b, c] = self.p;
-        std::array::from_fn(|k| 2.0 * ((1.0 - t) * (b[k] - a[k]) + t * (c[k] - b[k])))
+        if self.w == 1.0 {
+            return std::array::from_fn(|k| 2.0 * ((1.0 - t) * (b[k] - a[k]) + t * (c[k] - b[k])));
+        }
+        // (N' D - N D') / D^2 with N, D the homogeneous numerator and
+        // weight; the cubic terms cancel, leaving
+        // 2 [w s^2 (b - a) + s t (c - a) + w t^2 (c - b)] / D^2.
+        let (w, s) = (self.w, 1.0 - t);
+        let d = self.denom(t);
+        std::array::from_fn(|k| {
+            2.0 * (w * s * s * (b[k] - a[k]) + s * t * (c[k] - a[k]) + w * t * t * (c[k] - b[k]))
+                / (d * d)
+        })
     }
 
     /// `(1/2) int (x dy - y dx)` along the arc: summed over a closed chain,
-    /// the enclosed area.
+    /// the enclosed area. Rational arcs: the chord's term plus the
+    /// segment, [`segment_ratio`] times the signed control triangle.
     pub fn area_term(&self) -> f64 {
         let [a, b, c] = self.p;
-        (2.0 * cross(a, b) + cross(a, c) + 2.0 * cross(b, c)) / 6.0
+        if self.w == 1.0 {
+            return (2.0 * cross(a, b) + cross(a, c) + 2.0 * cross(b, c)) / 6.0;
+        }
+        let tri = 0.5 * (cross(a, b) + cross(b, c) - cross(a, c));
+        0.5 * cross(a, c) + segment_ratio(self.w) * tri
     }
 
-    /// The part of the arc for `t` in `t0..t1` (blossoming).
+    /// The part of the arc for `t` in `t0..t1` (blossoming; rational arcs
+    /// in homogeneous coordinates, brought back to end weights 1).
     pub fn sub(&self, t0: f64, t1: f64) -> Quad {
         let [a, b, c] = self.p;
         let w0 = (1.0 - t0) * (1.0 - t1);
         let w1 = (1.0 - t0) * t1 + t0 * (1.0 - t1);
         let w2 = t0 * t1;
-        Quad {
-            p: [
+        if self.w == 1.0 {
+            return Quad::new([
                 self.at(t0),
                 std::array::from_fn(|k| w0 * a[k] + w1 * b[k] + w2 * c[k]),
                 self.at(t1),
-            ],
+            ]);
         }
+        let w = self.w;
+        let hw = w0 + w1 * w + w2;
+        let m = std::array::from_fn(|k| (w0 * a[k] + w1 * w * b[k] + w2 * c[k]) / hw);
+        let nw = hw / (self.denom(t0) * self.denom(t1)).sqrt();
+        Quad::rational([self.at(t0), m, self.at(t1)], nw)
     }
 
     /// Closest point: parameter and squared distance.
     pub fn closest(&self, q: P2) -> (f64, f64) {
+        if self.w != 1.0 {
+            return self.closest_rational(q);
+        }
         let [p0, p1, p2] = self.p;
         let a = [p1[0] - p0[0], p1[1] - p0[1]];
         let b = [p0[0] - 2.0 * p1[0] + p2[0], p0[1] - 2.0 * p1[1] + p2[1]];
@@ -175,6 +313,53 @@ impl Quad {
             if v < best.1 {
                 best = (t, v);
             }
+        }
+        best
+    }
+}
+
+impl Quad {
+    /// Closest point on a rational arc: the roots of the quartic
+    /// `(N - q D) . (N' D - N D')` (the sign of `d |B - q|^2 / dt`) on
+    /// [0, 1], bracketed on 64 intervals and polished by bisection, and
+    /// the two ends.
+    fn closest_rational(&self, q: P2) -> (f64, f64) {
+        let dist2 = |t: f64| {
+            let p = self.at(t);
+            (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)
+        };
+        let f = |t: f64| {
+            let p = self.at(t);
+            let d = self.tangent(t);
+            (p[0] - q[0]) * d[0] + (p[1] - q[1]) * d[1]
+        };
+        let mut best = (0.0, dist2(0.0));
+        let e = dist2(1.0);
+        if e < best.1 {
+            best = (1.0, e);
+        }
+        const N: usize = 64;
+        let mut prev = f(0.0);
+        for i in 0..N {
+            let (mut lo, mut hi) = (i as f64 / N as f64, (i + 1) as f64 / N as f64);
+            let next = f(hi);
+            // A minimum: the distance falls, then grows.
+            if prev < 0.0 && next >= 0.0 {
+                for _ in 0..60 {
+                    let m = 0.5 * (lo + hi);
+                    if f(m) < 0.0 {
+                        lo = m;
+                    } else {
+                        hi = m;
+                    }
+                }
+                let t = 0.5 * (lo + hi);
+                let v = dist2(t);
+                if v < best.1 {
+                    best = (t, v);
+                }
+            }
+            prev = next;
         }
         best
     }
@@ -238,13 +423,19 @@ fn solve_cubic(a: f64, b: f64, c: f64, d: f64, out: &mut [f64; 3]) -> usize {
 /// The closed quadratic B-spline of a four-point control polygon, as its
 /// four Bezier arcs.
 pub fn bspline(ctrl: &[P2; 4]) -> [Quad; 4] {
-    std::array::from_fn(|k| Quad {
-        p: [
+    std::array::from_fn(|k| {
+        Quad::new([
             mid(ctrl[k], ctrl[(k + 1) % 4]),
             ctrl[(k + 1) % 4],
             mid(ctrl[(k + 1) % 4], ctrl[(k + 2) % 4]),
-        ],
+        ])
     })
+}
+
+/// The closed chain of rational quadratic arcs on a four-point control
+/// polygon, each corner weighted `w` (`w = 1`: [`bspline`], exactly).
+pub fn rational_bspline(ctrl: &[P2; 4], w: f64) -> [Quad; 4] {
+    bspline(ctrl).map(|q| Quad { w, ..q })
 }
 
 /// Area enclosed by a closed chain of arcs.
@@ -260,7 +451,8 @@ fn clip_half_plane(arcs: &[Quad], n: P2, c: f64) -> Vec<Quad> {
     let mut all_in = true;
     for a in arcs {
         // g(B(t)) = g0 (1-t)^2 + 2 g1 t (1-t) + g2 t^2 = A t^2 + B t + C.
-        let (g0, g1, g2) = (g(a.p[0]), g(a.p[1]), g(a.p[2]));
+        // Rational arcs: the numerator of g(B(t)), with g1 weighted.
+        let (g0, g1, g2) = (g(a.p[0]), a.w * g(a.p[1]), g(a.p[2]));
         let qa = g0 - 2.0 * g1 + g2;
         let qb = 2.0 * (g1 - g0);
         let qc = g0;
@@ -312,7 +504,8 @@ fn clip_half_plane(arcs: &[Quad], n: P2, c: f64) -> Vec<Quad> {
 }
 
 /// Area of the region inside the closed convex chain `arcs` and the
-/// rectangle `lo..hi`, exactly (arcs clipped at the roots of quadratics).
+/// rectangle `lo..hi`, exactly (arcs clipped at the roots of quadratics;
+/// rational arcs too, their area terms in closed form).
 pub fn clipped_area(arcs: &[Quad], lo: P2, hi: P2) -> f64 {
     let mut v = arcs.to_vec();
     for (n, c) in [

@@ -22,7 +22,16 @@
 //!   surface of that polyhedron (the quadratic subdivision surface the
 //!   paper cites, and the surface analogue of the 2D curve) as the pore.
 //!   See [`pore3`] for how the surface is evaluated and [`field`] for the
-//!   field.
+//!   field. The regular Doo-Sabin pore reaches the cell faces only at
+//!   porosity 0.6274 (the paper's 52.36 % is a sphere's), so below that a
+//!   pore keeps a small reach past the faces ([`Options::opening`]) and
+//!   gives up volume in its shape instead: the pores open into all their
+//!   neighbours from porosity 0.4559 up.
+//!
+//! The paper's controls are [`Options`]: irregularity, parent scale,
+//! subdivision (tree or T-mesh), the 2D curve's corner weight (rational
+//! arcs, [`curve`]), and the pore size as a cell edge or as the cell area /
+//! volume per pore ([`SizeMeasure`]).
 //!
 //! ```
 //! use microfrep_core::{Expr, PointEval, Tape};
@@ -64,7 +73,7 @@ pub mod tree;
 
 pub use build::{
     part_bounds, porosity_extremes_3d, porosity_range, Built, Dim, Options, PoreCell, PoreShape,
-    Pores, PorositySpec, SizeSpec, Spec, SplitRule,
+    Pores, PorositySpec, SizeMeasure, SizeSpec, Spec, SplitRule,
 };
 pub use error::PoreError;
 pub use field::PoreField;

@@ -8,9 +8,15 @@
 //! with `alpha = 5/6`; when the pore reaches past the cell (`kappa > 1`)
 //! the fourth is instead solved on the exact area of the pore clipped to
 //! the cell.
+//!
+//! With a corner weight `w != 1` the arcs are rational
+//! ([`crate::curve::rational_bspline`]) and `alpha` is
+//! [`crate::curve::alpha`]`(w)` instead of 5/6: the enclosed area is still
+//! a fixed share of the control polygon, so Eq. 8 still gives the fourth
+//! distance in closed form.
 
 use crate::curve::{
-    bspline, clipped_area, derived_polygon, polygon_fraction, solve_r4, Quad, ALPHA, P2,
+    alpha, clipped_area, derived_polygon, polygon_fraction, rational_bspline, solve_r4, Quad, P2,
 };
 use crate::rng::Rng;
 
@@ -42,10 +48,14 @@ struct Geometry {
     phi: P2,
     area: f64,
     parent_area: f64,
+    /// Corner weight of the arcs.
+    w: f64,
+    /// Share of the control polygon the curve encloses.
+    alpha: f64,
 }
 
 impl Geometry {
-    fn new(lo: P2, hi: P2, kappa: f64) -> Geometry {
+    fn new(lo: P2, hi: P2, kappa: f64, w: f64) -> Geometry {
         let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
         let h = [0.5 * (hi[0] - lo[0]) * kappa, 0.5 * (hi[1] - lo[1]) * kappa];
         let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
@@ -56,12 +66,14 @@ impl Geometry {
             phi: [c[0] + h[0], c[1] + h[1]],
             area,
             parent_area: area * kappa * kappa,
+            w,
+            alpha: alpha(w),
         }
     }
 
     fn pore(&self, r: [f64; 4]) -> ([P2; 4], [Quad; 4]) {
         let ctrl = derived_polygon(self.plo, self.phi, r);
-        (ctrl, bspline(&ctrl))
+        (ctrl, rational_bspline(&ctrl, self.w))
     }
 
     /// Porosity of the cell with fractions `r`.
@@ -72,7 +84,7 @@ impl Geometry {
 
     /// Porosity without clipping (Eqs. 4-6).
     fn unclipped(&self, r: [f64; 4]) -> f64 {
-        ALPHA * polygon_fraction(r) * self.parent_area / self.area
+        self.alpha * polygon_fraction(r) * self.parent_area / self.area
     }
 }
 
@@ -93,7 +105,12 @@ pub fn base(q: f64) -> [f64; 4] {
 /// Largest porosity for a parent scale: the pore of the parent polygon
 /// itself (all fractions 0), clipped to the cell.
 pub fn max_porosity(kappa: f64) -> f64 {
-    Geometry::new([-1.0, -1.0], [1.0, 1.0], kappa).porosity([0.0; 4])
+    max_porosity_weighted(kappa, 1.0)
+}
+
+/// As [`max_porosity`], for arcs of corner weight `w`.
+pub fn max_porosity_weighted(kappa: f64, w: f64) -> f64 {
+    Geometry::new([-1.0, -1.0], [1.0, 1.0], kappa, w).porosity([0.0; 4])
 }
 
 /// Bisection for `g(x) = target` on `[a, b]` with `g` increasing.
@@ -111,13 +128,21 @@ fn bisect(mut a: f64, mut b: f64, target: f64, g: impl Fn(f64) -> f64) -> f64 {
 
 /// Solves the pore of the cell `lo..hi` for porosity `target` in
 /// `(0, max_porosity(kappa)]`, with random distances of spread `sigma`
-/// (0 gives the symmetric pore).
-pub(crate) fn solve(lo: P2, hi: P2, kappa: f64, target: f64, sigma: f64, rng: &mut Rng) -> Solved2 {
-    let g = Geometry::new(lo, hi, kappa);
+/// (0 gives the symmetric pore) and arcs of corner weight `w`.
+pub(crate) fn solve(
+    lo: P2,
+    hi: P2,
+    kappa: f64,
+    w: f64,
+    target: f64,
+    sigma: f64,
+    rng: &mut Rng,
+) -> Solved2 {
+    let g = Geometry::new(lo, hi, kappa, w);
     // Polygon fraction of the symmetric pore: closed form when the pore
     // stays in the cell, else bisection on the clipped area (which grows
     // with q along the base family).
-    let q_open = target * g.area / (ALPHA * g.parent_area);
+    let q_open = target * g.area / (g.alpha * g.parent_area);
     let q = if q_open <= 1.0 && (g.porosity(base(q_open)) - target).abs() < 1e-12 {
         q_open
     } else {

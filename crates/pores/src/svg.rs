@@ -75,11 +75,22 @@ pub fn section_svg(
                 arcs[0].p[0][0], arcs[0].p[0][1]
             );
             for a in arcs {
-                let _ = write!(
-                    s,
-                    "Q{} {} {} {} ",
-                    a.p[1][0], a.p[1][1], a.p[2][0], a.p[2][1]
-                );
+                // SVG has no rational arcs: a weighted arc is drawn as 16
+                // polynomial pieces on the control points of its parts
+                // (well under a thousandth of the cell off the curve).
+                let pieces = if a.w == 1.0 { 1 } else { 16 };
+                for k in 0..pieces {
+                    let q = if pieces == 1 {
+                        *a
+                    } else {
+                        a.sub(k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64)
+                    };
+                    let _ = write!(
+                        s,
+                        "Q{} {} {} {} ",
+                        q.p[1][0], q.p[1][1], q.p[2][0], q.p[2][1]
+                    );
+                }
             }
             let _ = writeln!(s, r#"Z"/>"#);
         }

@@ -336,6 +336,7 @@ fn one_cell_porosity_matches_sampling_of_its_field() {
             lambda,
             irregularity,
             t,
+            ..
         } = &b.cells[0].shape
         else {
             panic!()

@@ -261,7 +261,7 @@ fn block_porosity_meets_its_target_to_a_thousandth() {
     use microfrep_analysis::{measure::measure, Grid};
     for (side, target, res) in [
         (1.0, 0.40, 128),
-        (1.0, 0.55, 128),
+        (1.0, 0.55, 192),
         (1.0, 0.70, 192),
         (1.0, 0.90, 224),
         (10.0, 0.40, 128),
