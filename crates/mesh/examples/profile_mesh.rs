@@ -1,7 +1,8 @@
 //! Times the mesher on a built-in example, for profiling: `cargo run
 //! --release -p microfrep-mesh --example profile_mesh -- NAME N [THREADS]`.
 //! `STREAM=1` streams through a counting sink instead of collecting the
-//! mesh; `BRICK=K` sets the brick size; `CUBES=1` uses marching cubes.
+//! mesh; `BRICK=K` sets the brick size; `CUBES=1` uses marching cubes;
+//! `SHARP=1` turns on sharp features.
 
 use microfrep_core::Shape;
 use microfrep_mesh::{MeshOptions, Plan};
@@ -28,6 +29,7 @@ fn main() {
         if std::env::var("CUBES").is_ok() {
             opts.cells = microfrep_mesh::CellMethod::Cubes;
         }
+        opts.sharp = std::env::var("SHARP").is_ok();
         let plan = Plan::new(&Shape::from(&expr), &opts).expect("plan");
         let t_plan = t.elapsed().as_secs_f64();
         // STREAM=1: through a counting sink, never holding the mesh.

@@ -7,7 +7,7 @@ use crate::correct::{accumulate, apply_all, Acc};
 use crate::grid::Grid;
 use crate::refine::{common_t_min, refine_edges, Edge};
 use crate::tets::CellTable;
-use microfrep_core::{BatchEval, Interval, IntervalEval, Simplify, Tape, BLOCK};
+use microfrep_core::{BatchEval, GradBatchEval, Interval, IntervalEval, Simplify, Tape, BLOCK};
 
 /// The part of the mesh made by one brick. Vertices on grid edges that start
 /// in this brick's half-open node range are owned here; the others are
@@ -80,6 +80,11 @@ pub struct Scratch {
     count_edges: bool,
     /// Whether each local vertex lies in a face plane of the brick.
     face: Vec<bool>,
+    /// With sharp features: the gradient evaluator of the full tape, and
+    /// every surface cell as (sign pattern, its first triangle in `tris`,
+    /// packed local cell coordinates).
+    grad: Option<GradBatchEval>,
+    cells: Vec<(u8, u32, u32)>,
 }
 
 /// How a brick's vertices are finished: the grid's cell size, the volume
@@ -88,6 +93,8 @@ pub struct Scratch {
 pub struct Finish {
     pub h: f64,
     pub correct: bool,
+    /// Sharp features ([`crate::sharp`]; marching cubes only).
+    pub sharp: bool,
     pub lo: [f32; 3],
     pub hi: [f32; 3],
 }
@@ -104,6 +111,8 @@ impl Scratch {
     ) -> Self {
         let nodes = (brick + 1).pow(3);
         Scratch {
+            grad: finish.sharp.then(|| GradBatchEval::new(tape)),
+            cells: Vec::new(),
             count_edges,
             face: Vec::new(),
             tape: tape.clone(),
@@ -164,6 +173,8 @@ pub fn mesh_brick(
     let sz = n[0] * n[1];
     s.tris.clear();
     s.verts.clear();
+    s.cells.clear();
+    let sharp = s.grad.is_some();
     let mut q = vec![0u8; n[0]];
     // Per cell edge (start corner * 8 + direction): its vmap slot and packed
     // start node relative to the cell's, and which node layer it starts in.
@@ -210,6 +221,9 @@ pub fn mesh_brick(
                 }
                 let range = table.start[mask] as usize..table.start[mask + 1] as usize;
                 let (base, pbase) = ((j * sy + i) * stride, (i | j << 9 | k << 18) as u32);
+                if sharp && spread_at_corners(&s.vals, row + i, sy, sz) {
+                    s.cells.push((mask as u8, s.tris.len() as u32, pbase));
+                }
                 for tri in &table.tris[range] {
                     s.tris.push(tri.map(|e| {
                         let o = &offs[e as usize];
@@ -329,6 +343,27 @@ pub fn mesh_brick(
     for (&at, &p) in s.full_edge_of.iter().zip(&s.refined) {
         s.pos[to_local(at) as usize] = p;
     }
+    // Sharp features: fans around feature vertices, owned by this brick
+    // and numbered after its other owned vertices (the foreign ones move up).
+    let mut pinned = Vec::new();
+    if sharp {
+        let (feats, pin) = features(grid, lo, table, s);
+        pinned = pin;
+        if !feats.is_empty() {
+            let nf = feats.len() as u32;
+            for r in s.remap.iter_mut() {
+                if *r >= owned {
+                    *r += nf;
+                }
+            }
+            s.remap.extend(owned..owned + nf);
+            if s.count_edges {
+                s.face.resize(s.remap.len(), false);
+            }
+            s.pos.splice(owned as usize..owned as usize, feats);
+            owned += nf;
+        }
+    }
     out.owned_keys.sort_unstable();
     if s.count_edges {
         let mut e = BrickEdges::of(&s.tris, &s.face);
@@ -347,9 +382,15 @@ pub fn mesh_brick(
     // alike by their owner). Vertices no other brick touches are final.
     let f = s.finish;
     s.acc.clear();
-    s.acc.resize(s.pos.len(), [0; 5]);
+    s.acc.resize(s.pos.len(), [0; 6]);
     if f.correct {
         accumulate(&mut s.batch, &s.pos, &out.tris, f.h, &mut s.acc);
+        if sharp {
+            // Vertices of features with flat sides keep their place.
+            for &v in &pinned {
+                s.acc[s.remap[v as usize] as usize][5] += 1;
+            }
+        }
     }
     let owned = owned as usize;
     out.shared_acc = out
@@ -369,11 +410,374 @@ pub fn mesh_brick(
         .iter()
         .map(|&(_, v)| out.owned_pos[v as usize])
         .collect();
-    apply_all(&mut out.owned_pos, &s.acc[..owned], &[], f.h, f.lo, f.hi);
+    apply_all(
+        &mut out.owned_pos,
+        &s.acc[..owned],
+        &[],
+        f.h,
+        f.lo,
+        f.hi,
+        f.sharp,
+    );
     for (&(_, v), &p) in out.owned_keys.iter().zip(&unmoved) {
         out.owned_pos[v as usize] = p;
     }
     out
+}
+
+/// Whether the corner samples of the cell at node `l` (strides `sy`, `sz`
+/// in `vals`) could hide a feature: the gradients from the differences
+/// along each corner's three cell edges differ by more than 20 degrees
+/// somewhere, or one of them vanishes. A plane passes (its differences
+/// are the same everywhere); only cells that fail pay for gradients.
+fn spread_at_corners(vals: &[f32], l: usize, sy: usize, sz: usize) -> bool {
+    const COS: f32 = 0.939_692_6;
+    let v = |x: usize, y: usize, z: usize| vals[l + x + y * sy + z * sz];
+    let g: [[f32; 3]; 8] = std::array::from_fn(|c| {
+        let (x, y, z) = (c & 1, c >> 1 & 1, c >> 2);
+        [
+            v(1, y, z) - v(0, y, z),
+            v(x, 1, z) - v(x, 0, z),
+            v(x, y, 1) - v(x, y, 0),
+        ]
+    });
+    let len = g.map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+    if len
+        .iter()
+        .any(|&l| l.is_nan() || l <= 0.0 || !l.is_finite())
+    {
+        return true;
+    }
+    (0..8).any(|a| {
+        (a + 1..8).any(|b| {
+            let d = g[a][0] * g[b][0] + g[a][1] * g[b][1] + g[a][2] * g[b][2];
+            d < COS * len[a] * len[b]
+        })
+    })
+}
+
+/// The sharp features of the brick's cells ([`crate::sharp`]): each cycle
+/// whose vertex normals spread is fanned around a new vertex (numbered
+/// after the brick's local vertices, `s.remap.len()` on, in `s.tris`),
+/// then crease segments shared by two fans of this brick are flipped.
+/// Returns the new vertices' positions, and the vertices of every
+/// feature with flat sides (fanned or not, and the feature vertex of those
+/// fanned), which the volume correction leaves in place. Normals come from the full tape at
+/// the vertices' positions, so a cell gets the same feature vertex in any
+/// brick layout that gives it the same vertices.
+fn features(
+    grid: &Grid,
+    lo: [usize; 3],
+    table: &CellTable,
+    s: &mut Scratch,
+) -> (Vec<[f32; 3]>, Vec<u32>) {
+    use std::collections::HashMap;
+    let cycles = crate::cubes::cycle_table();
+    let h = grid.h;
+    let np = s.pos.len();
+    // The local vertices of the candidate cells (`at[i]`: the place of
+    // local vertex `i` among them), their edges and their samples.
+    let mut at = vec![u32::MAX; np];
+    let mut which: Vec<usize> = Vec::new();
+    for &(mask, base, _) in &s.cells {
+        let m = mask as usize;
+        let count = (table.start[m + 1] - table.start[m]) as usize;
+        for t in &s.tris[base as usize..base as usize + count] {
+            for &v in t {
+                let i = s.remap[v as usize] as usize;
+                if at[i] == u32::MAX {
+                    at[i] = which.len() as u32;
+                    which.push(i);
+                }
+            }
+        }
+    }
+    let mut edge_of = vec![(0usize, [0.0f64; 2]); which.len()];
+    for (vi, &packed) in s.verts.iter().enumerate() {
+        let w = at[s.remap[vi] as usize];
+        if w == u32::MAX {
+            continue;
+        }
+        let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
+        let axis = ((packed >> 27) as usize).trailing_zeros() as usize;
+        let a = grid.node_pos(std::array::from_fn(|k| lo[k] + ln[k]));
+        let t = 1e-3 * h;
+        edge_of[w as usize] = (axis, [a[axis] + t, a[axis] + h - t]);
+    }
+    let ev = s.grad.as_mut().expect("sharp features have a gradient");
+    let mut g = vec![[0.0f32; 4]; which.len()];
+    {
+        let col = |k: usize| -> Vec<f32> { which.iter().map(|&i| s.pos[i][k]).collect() };
+        ev.eval(&col(0), &col(1), &col(2), &mut g);
+    }
+    // Regula falsi leaves vertices a few hundredths of a cell off the
+    // surface where their edge crosses a crease (the field has a kink
+    // there); Newton steps along the edge, each kept only where it lowers
+    // |f|, put them on it.
+    let mut todo: Vec<usize> = Vec::new();
+    let mut trial: Vec<[f32; 3]> = Vec::new();
+    for _ in 0..4 {
+        todo.clear();
+        trial.clear();
+        for (w, gi) in g.iter().enumerate() {
+            let i = which[w];
+            let (axis, [lo_t, hi_t]) = edge_of[w];
+            let slope = gi[1 + axis];
+            let len = (gi[1] * gi[1] + gi[2] * gi[2] + gi[3] * gi[3]).sqrt();
+            let off = gi[0].abs() > 1e-4 * h as f32 * len;
+            if !off || slope == 0.0 {
+                continue;
+            }
+            let mut p = s.pos[i];
+            let x = (p[axis] as f64 - gi[0] as f64 / slope as f64).clamp(lo_t, hi_t);
+            p[axis] = x as f32;
+            if p != s.pos[i] {
+                todo.push(w);
+                trial.push(p);
+            }
+        }
+        if todo.is_empty() {
+            break;
+        }
+        let col = |k: usize| -> Vec<f32> { trial.iter().map(|p| p[k]).collect() };
+        let mut gt = vec![[0.0f32; 4]; todo.len()];
+        ev.eval(&col(0), &col(1), &col(2), &mut gt);
+        for ((&w, &p), gn) in todo.iter().zip(&trial).zip(&gt) {
+            if gn[0].abs() < g[w][0].abs() {
+                s.pos[which[w]] = p;
+                g[w] = *gn;
+            }
+        }
+    }
+    let mut normals = vec![[0.0f64; 3]; np];
+    for (&i, g) in which.iter().zip(&g) {
+        let n = &mut normals[i];
+        let d = [g[1] as f64, g[2] as f64, g[3] as f64];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if len > 0.0 && len.is_finite() {
+            *n = d.map(|v| -v / len);
+        }
+    }
+    let first = s.remap.len() as u32;
+    // Candidate fans: the feature vertex, and the cycle's triangles in
+    // `s.tris` and fan triangles in `fans` (one per crossing, in order).
+    let mut feats: Vec<[f32; 3]> = Vec::new();
+    let mut old: Vec<std::ops::Range<usize>> = Vec::new();
+    let mut old_tris: Vec<usize> = Vec::new();
+    let mut fans: Vec<[u32; 3]> = Vec::new();
+    let mut fan_of: Vec<usize> = Vec::new();
+    let (mut vs, mut ps, mut ns) = (Vec::new(), Vec::new(), Vec::new());
+    let mut pinned = Vec::new();
+    let mut planar = Vec::new();
+    for &(mask, base, packed) in &s.cells {
+        let m = mask as usize;
+        let t0 = table.start[m] as usize;
+        let cell = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
+        let corner = grid.node_pos(std::array::from_fn(|a| lo[a] + cell[a]));
+        for cy in &cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize] {
+            let tris = cy.tris.start as usize..cy.tris.end as usize;
+            vs.clear();
+            for &e in &cy.edges {
+                let v = tris.clone().find_map(|t| {
+                    let tri = s.tris[base as usize + t - t0];
+                    table.tris[t].iter().position(|&x| x == e).map(|q| tri[q])
+                });
+                vs.push(v.expect("a cycle's crossings are its triangles' corners"));
+            }
+            ps.clear();
+            ns.clear();
+            for &v in &vs {
+                let i = s.remap[v as usize] as usize;
+                let p = s.pos[i];
+                ps.push(std::array::from_fn(|k| (p[k] as f64 - corner[k]) / h));
+                ns.push(normals[i]);
+            }
+            let Some(feature) = crate::sharp::feature_point(&ps, &ns) else {
+                continue;
+            };
+            if feature.planar {
+                pinned.extend_from_slice(&vs);
+            }
+            let Some(x) = feature.point else {
+                continue;
+            };
+            planar.push(feature.planar);
+            let id = first + feats.len() as u32;
+            let c = feats.len();
+            feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
+            let start = old_tris.len();
+            old_tris.extend(tris.map(|t| base as usize + t - t0));
+            old.push(start..old_tris.len());
+            let n = vs.len();
+            for i in 0..n {
+                fans.push([id, vs[i], vs[(i + 1) % n]]);
+                fan_of.push(c);
+            }
+        }
+    }
+    if feats.is_empty() {
+        return (feats, pinned);
+    }
+    // Shared segments: fan triangles `f1 a b` and `f2 b a` of two cells
+    // that share no other segment.
+    let mut seg: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut pairs: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut shared = Vec::new();
+    for (ti, t) in fans.iter().enumerate() {
+        let key = (t[1].min(t[2]), t[1].max(t[2]));
+        match seg.get(&key) {
+            Some(&o) => {
+                let f = (fans[o][0].min(t[0]), fans[o][0].max(t[0]));
+                *pairs.entry(f).or_default() += 1;
+                shared.push((o, ti));
+            }
+            None => {
+                seg.insert(key, ti);
+            }
+        }
+    }
+    shared.retain(|&(o, ti)| {
+        let ([f1, a, b], [f2, b2, a2]) = (fans[o], fans[ti]);
+        (a2, b2) == (a, b) && f1 != f2
+    });
+    let single = |fans: &[[u32; 3]], o: usize, ti: usize| {
+        let (f1, f2) = (fans[o][0], fans[ti][0]);
+        pairs[&(f1.min(f2), f1.max(f2))] == 1
+    };
+    let pos = |feats: &[[f32; 3]], v: u32| -> [f64; 3] {
+        let p = if v >= first {
+            feats[(v - first) as usize]
+        } else {
+            s.pos[s.remap[v as usize] as usize]
+        };
+        p.map(|c| c as f64)
+    };
+    let normal = |v: u32| normals[s.remap[v as usize] as usize];
+    let flips = |feats: &[[f32; 3]], fans: &[[u32; 3]], o: usize, ti: usize| {
+        let ([f1, a, b], [f2, ..]) = (fans[o], fans[ti]);
+        let p = |v| pos(feats, v);
+        crate::sharp::flip(p(f1), p(f2), p(a), p(b), normal(a), normal(b), h)
+    };
+    // Merges: two feature vertices within half a cell of each other whose
+    // shared segment does not flip (both cells found the same stretch of
+    // crease, one of them just outside itself) become one, at their
+    // midpoint, with the two triangles on the segment dropped: the two
+    // fans join into one disk. A cell merges once at most, and only with a
+    // cell whose cycle shares no crossing but the segment's two.
+    let mut group: Vec<usize> = (0..feats.len()).collect();
+    let mut dead = vec![false; fans.len()];
+    let mut merged = vec![false; feats.len()];
+    let cycle_of = |c: usize| fans.iter().zip(&fan_of).filter(move |(_, &d)| d == c);
+    for &(o, ti) in &shared {
+        let (c1, c2) = (fan_of[o], fan_of[ti]);
+        if merged[c1] || merged[c2] || !single(&fans, o, ti) {
+            continue;
+        }
+        let (f1, f2) = (pos(&feats, fans[o][0]), pos(&feats, fans[ti][0]));
+        let d = sub3(f1, f2);
+        if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() > 0.5 * h || flips(&feats, &fans, o, ti)
+        {
+            continue;
+        }
+        let common = cycle_of(c1)
+            .filter(|(t, _)| cycle_of(c2).any(|(u, _)| u[1] == t[1]))
+            .count();
+        if common != 2 {
+            continue;
+        }
+        group[c2] = c1;
+        merged[c1] = true;
+        merged[c2] = true;
+        feats[c1] = std::array::from_fn(|k| (0.5 * (f1[k] + f2[k])) as f32);
+        dead[o] = true;
+        dead[ti] = true;
+    }
+    for (t, &c) in fans.iter_mut().zip(&fan_of) {
+        t[0] = first + group[c] as u32;
+    }
+    // partner[ti]: the fan triangle it flips with, if the flip is proper.
+    // Two cells whose cycles share two segments (an ambiguous face) flip
+    // one of them at most, so the edge `f1 f2` is made once.
+    let mut partner = vec![usize::MAX; fans.len()];
+    let mut joined = std::collections::HashSet::new();
+    for &(o, ti) in &shared {
+        let (f1, f2) = (fans[o][0], fans[ti][0]);
+        let fresh = !joined.contains(&(f1.min(f2), f1.max(f2)));
+        if !dead[o] && f1 != f2 && fresh && flips(&feats, &fans, o, ti) {
+            joined.insert((f1.min(f2), f1.max(f2)));
+            partner[o] = ti;
+            partner[ti] = o;
+        }
+    }
+    // A fan (or a merged pair) is kept when each of its triangles is
+    // proper or flips with a kept fan's; refusing a fan can refuse its flip
+    // partners, so repeat until nothing changes.
+    let ok: Vec<bool> = fans
+        .iter()
+        .zip(&dead)
+        .map(|(&[f, a, b], &d)| {
+            let p = |v| pos(&feats, v);
+            d || crate::sharp::fan_ok(p(f), p(a), p(b), normal(a), normal(b), h)
+        })
+        .collect();
+    let mut keep = vec![true; feats.len()];
+    loop {
+        let mut changed = false;
+        for (ti, &c) in fan_of.iter().enumerate() {
+            let (g, p) = (group[c], partner[ti]);
+            let flipped = p != usize::MAX && keep[group[fan_of[p]]];
+            if keep[g] && !ok[ti] && !flipped {
+                keep[g] = false;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    for (ti, &c) in fan_of.iter().enumerate() {
+        let p = partner[ti];
+        if keep[group[c]] && p != usize::MAX && keep[group[fan_of[p]]] {
+            // `f1 a b` becomes `f1 a f2`, and its partner `f2 b a` becomes
+            // `f2 b f1` in its turn (the first corners do not change).
+            fans[ti][2] = fans[p][0];
+        }
+    }
+    // Number the kept feature vertices densely, in order.
+    let mut new_id = vec![u32::MAX; feats.len()];
+    let mut kept = Vec::new();
+    for c in 0..feats.len() {
+        if keep[group[c]] {
+            if group[c] == c {
+                new_id[c] = first + kept.len() as u32;
+                if planar[c] {
+                    pinned.push(new_id[c]);
+                }
+                kept.push(feats[c]);
+            }
+            for &t in &old_tris[old[c].clone()] {
+                s.tris[t] = [u32::MAX; 3];
+            }
+        }
+    }
+    s.tris.retain(|t| t[0] != u32::MAX);
+    for (ti, t) in fans.iter().enumerate() {
+        if keep[group[fan_of[ti]]] && !dead[ti] {
+            let at = |v: u32| {
+                if v >= first {
+                    new_id[(v - first) as usize]
+                } else {
+                    v
+                }
+            };
+            s.tris.push(t.map(at));
+        }
+    }
+    (kept, pinned)
+}
+
+fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// Samples the brick's nodes in f32 batches; inside is `f >= 0` (NaN is
@@ -593,6 +997,7 @@ mod tests {
         let finish = Finish {
             h: plan.grid.h,
             correct: true,
+            sharp: false,
             lo: [-1.1; 3],
             hi: [1.1; 3],
         };

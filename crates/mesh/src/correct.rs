@@ -21,12 +21,19 @@ use crate::lanes::select;
 use microfrep_core::{BatchEval, BLOCK};
 
 /// Per-vertex sums: area-weighted normal (x, y, z) and area in units of
-/// `h^2 / 2^24`, area times gap in units of `h^3 / 2^24`. A vertex's
+/// `h^2 / 2^24`, area times gap in units of `h^3 / 2^24`, and the number
+/// of the vertex's triangles that lie in sharp-feature fans
+/// ([`crate::sharp`]; such vertices are not moved). A vertex's
 /// triangles lie in the few cells around its grid edge (at most 24 of
 /// them, none larger than a cell's largest cross-section, sqrt 3 cell
 /// areas; gaps at most half a cell), so every sum stays under 2^30 and
 /// plain wrapping adds are exact, in any order.
-pub type Acc = [i32; 5];
+pub type Acc = [i32; 6];
+
+/// The squared ratio of the summed area normal's length to the summed area
+/// above which a vertex's triangles count as coplanar (cosine of a quarter
+/// degree, squared).
+const FLAT: f32 = 0.999_981;
 
 /// Fixed-point units per cell area (or volume).
 const UNIT: f32 = (1u32 << 24) as f32;
@@ -155,7 +162,7 @@ pub fn accumulate(
 
 /// Adds `b` into `a`.
 pub fn add(a: &mut Acc, b: &Acc) {
-    for k in 0..5 {
+    for k in 0..6 {
         a[k] = a[k].wrapping_add(b[k]);
     }
 }
@@ -168,7 +175,12 @@ pub fn add(a: &mut Acc, b: &Acc) {
 /// leave the box it stops at the face (a vertex on a face slides within
 /// it), so the correction never pushes a vertex through the box's faces,
 /// edges or corners. Then every vertex is clamped into the box. Vertices
-/// whose sums are degenerate (no area, no normal) do not move.
+/// whose sums are degenerate (no area, no normal) do not move; with
+/// `keep_flat`, neither do vertices in a sharp-feature fan (a nonzero
+/// count in their sums) nor those whose triangles are coplanar to within
+/// a quarter of a degree (the length of the summed area normal within
+/// `FLAT` of the summed area): a flat face stays where refinement put it,
+/// on the surface.
 ///
 /// In f32 and a block of vertices at a time, in columns, so the square
 /// roots and divisions vectorise.
@@ -179,12 +191,13 @@ pub fn apply_all(
     h: f64,
     lo: [f32; 3],
     hi: [f32; 3],
+    keep_flat: bool,
 ) {
     const N: usize = 64;
     let scale = (0.75 * h) as f32;
-    let mut col = [[0.0f32; N]; 5];
+    let mut col = [[0.0f32; N]; 6];
     let mut d = [[0.0f32; N]; 3];
-    let zeros = [[0; 5]; N];
+    let zeros = [[0; 6]; N];
     for (c, p) in pos.chunks_mut(N).enumerate() {
         let n = p.len();
         let a = &own[c * N..][..n];
@@ -194,7 +207,7 @@ pub fn apply_all(
             &inbound[c * N..][..n]
         };
         for i in 0..n {
-            for k in 0..5 {
+            for k in 0..6 {
                 col[k][i] = a[i][k].wrapping_add(b[i][k]) as f32;
             }
         }
@@ -202,6 +215,8 @@ pub fn apply_all(
             let len2 = col[0][i] * col[0][i] + col[1][i] * col[1][i] + col[2][i] * col[2][i];
             let f = scale * col[3][i] / (col[4][i] * len2.sqrt());
             let ok = (len2 > 0.0) as u32 & (col[4][i] > 0.0) as u32 & f.is_finite() as u32;
+            let flat = (col[5][i] > 0.0) as u32 | (len2 >= FLAT * col[4][i] * col[4][i]) as u32;
+            let ok = ok & !(keep_flat as u32 & flat) & 1;
             let f = select(ok, f, 0.0);
             for k in 0..3 {
                 d[k][i] = f * col[k][i];
@@ -240,8 +255,8 @@ mod tests {
         // 0.75 * 0.2 * h along +x; degenerate sums do not move.
         let h = 0.5;
         let u = 1 << 20;
-        let out: Acc = [u, 0, 0, u / 5, u];
-        let zero: Acc = [0; 5];
+        let out: Acc = [u, 0, 0, u / 5, u, 0];
+        let zero: Acc = [0; 6];
         let lo = [-1.0f32; 3];
         let hi = [1.0f32; 3];
         let mut p = vec![
@@ -252,7 +267,7 @@ mod tests {
         ];
         let own = vec![out, out, zero, out];
         let inbound = vec![zero, zero, zero, zero];
-        apply_all(&mut p, &own, &inbound, h, lo, hi);
+        apply_all(&mut p, &own, &inbound, h, lo, hi, false);
         assert!((p[0][0] - 0.075).abs() < 1e-6, "{:?}", p[0]);
         assert_eq!(&p[0][1..], &[0.0, 0.0]);
         // Near the face x = 1: stops on it, and slides nowhere else.
@@ -260,17 +275,27 @@ mod tests {
         assert_eq!(p[2], [0.3, 0.3, 0.3]);
         assert_eq!(p[3], [1.0, 0.0, 0.0]);
         // Own and inbound sums add: half the gap each way gives the same.
-        let half: Acc = [u / 2, 0, 0, u / 10, u / 2];
+        let half: Acc = [u / 2, 0, 0, u / 10, u / 2, 0];
         let mut q = vec![[0.0f32; 3]];
-        apply_all(&mut q, &[half], &[half], h, lo, hi);
+        apply_all(&mut q, &[half], &[half], h, lo, hi, false);
         assert!((q[0][0] - 0.075).abs() < 1e-6, "{:?}", q[0]);
+        // Kept flat: a single plane does not move, nor a fan vertex.
+        let mut q = vec![[0.0f32; 3]];
+        apply_all(&mut q, &[half], &[half], h, lo, hi, true);
+        assert_eq!(q[0], [0.0; 3]);
+        let curved: Acc = [u / 2, u / 4, 0, u / 10, u, 0];
+        let fan: Acc = [0, 0, 0, 0, 0, 1];
+        let mut q = vec![[0.0f32; 3]; 2];
+        apply_all(&mut q, &[curved, curved], &[zero, fan], h, lo, hi, true);
+        assert!(q[0][0] > 0.0, "{:?}", q[0]);
+        assert_eq!(q[1], [0.0; 3]);
     }
 
     #[test]
     fn a_vertex_outside_the_box_is_clamped_onto_it() {
-        let zero: Acc = [0; 5];
+        let zero: Acc = [0; 6];
         let mut p = vec![[1.5f32, -2.0, 0.25]];
-        apply_all(&mut p, &[zero], &[zero], 0.1, [-1.0; 3], [1.0; 3]);
+        apply_all(&mut p, &[zero], &[zero], 0.1, [-1.0; 3], [1.0; 3], false);
         assert_eq!(p[0], [1.0, -1.0, 0.25]);
     }
 }

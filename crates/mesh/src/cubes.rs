@@ -31,16 +31,57 @@ use std::sync::OnceLock;
 /// Triangles for each of the 256 corner sign patterns of a cell (bit c set
 /// when corner c = x + 2 y + 4 z is inside).
 pub fn cell_table() -> &'static CellTable {
-    static TABLE: OnceLock<CellTable> = OnceLock::new();
+    &tables().0
+}
+
+/// One cycle of face segments of a cell: its crossings in order (the
+/// orientation of its triangles) and the range of `cell_table().tris` that
+/// triangulates it as a disk.
+#[derive(Clone, Debug)]
+pub struct Cycle {
+    /// The crossings, in the order the cycle's triangles traverse it.
+    pub edges: Vec<CellEdge>,
+    /// The cycle's triangles in [`cell_table`] (`len - 2` of them).
+    pub tris: std::ops::Range<u16>,
+}
+
+/// The cycles of face segments for each of the 256 sign patterns:
+/// `cycles[start[m]..start[m + 1]]`, in the order their triangles appear in
+/// [`cell_table`] (used to replace a cycle's disk by another one with the
+/// same boundary, [`crate::sharp`]).
+pub struct CycleTable {
+    /// Offsets into `cycles`, one per sign pattern and one past the end.
+    pub start: [u16; 257],
+    /// The cycles of every pattern.
+    pub cycles: Vec<Cycle>,
+}
+
+/// The table of [`CycleTable`], built with [`cell_table`] on first use.
+pub fn cycle_table() -> &'static CycleTable {
+    &tables().1
+}
+
+fn tables() -> &'static (CellTable, CycleTable) {
+    static TABLE: OnceLock<(CellTable, CycleTable)> = OnceLock::new();
     TABLE.get_or_init(|| {
         let mut start = [0u16; 257];
+        let mut cstart = [0u16; 257];
         let mut tris = Vec::new();
-        for (m, s) in start.iter_mut().take(256).enumerate() {
-            *s = tris.len() as u16;
-            cell_triangles(m as u8, &mut tris);
+        let mut cycles = Vec::new();
+        for m in 0..256usize {
+            start[m] = tris.len() as u16;
+            cstart[m] = cycles.len() as u16;
+            cell_triangles(m as u8, &mut tris, &mut cycles);
         }
         start[256] = tris.len() as u16;
-        CellTable { start, tris }
+        cstart[256] = cycles.len() as u16;
+        (
+            CellTable { start, tris },
+            CycleTable {
+                start: cstart,
+                cycles,
+            },
+        )
     })
 }
 
@@ -84,7 +125,7 @@ fn share_face(e: CellEdge, g: CellEdge) -> bool {
     })
 }
 
-fn cell_triangles(m: u8, out: &mut Vec<[CellEdge; 3]>) {
+fn cell_triangles(m: u8, out: &mut Vec<[CellEdge; 3]>, cycles: &mut Vec<Cycle>) {
     let inside = |c: u8| m >> c & 1 == 1;
     // Directed face segments: next[e] is the crossing after e.
     let mut next = [u8::MAX; 64];
@@ -143,7 +184,12 @@ fn cell_triangles(m: u8, out: &mut Vec<[CellEdge; 3]>) {
             cycle.push(e);
             e = next[e as usize];
         }
+        let first = out.len() as u16;
         triangulate(&cycle, m, out);
+        cycles.push(Cycle {
+            edges: cycle,
+            tris: first..out.len() as u16,
+        });
     }
 }
 
@@ -211,6 +257,24 @@ mod tests {
             let n = tris(m).len();
             assert_eq!(n == 0, m == 0 || m == 255, "mask {m}");
             assert!(n <= 12, "mask {m}: {n}");
+        }
+    }
+
+    #[test]
+    fn cycles_cover_their_triangles_and_nothing_else() {
+        let (t, c) = (cell_table(), cycle_table());
+        for m in 0..256usize {
+            let cs = &c.cycles[c.start[m] as usize..c.start[m + 1] as usize];
+            let mut next = t.start[m];
+            for cy in cs {
+                assert_eq!(cy.tris.start, next, "mask {m}");
+                assert_eq!(cy.tris.len() + 2, cy.edges.len(), "mask {m}");
+                for tri in &t.tris[cy.tris.start as usize..cy.tris.end as usize] {
+                    assert!(tri.iter().all(|e| cy.edges.contains(e)), "mask {m}");
+                }
+                next = cy.tris.end;
+            }
+            assert_eq!(next, t.start[m + 1], "mask {m}");
         }
     }
 

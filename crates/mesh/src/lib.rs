@@ -40,6 +40,7 @@ mod pipeline;
 mod refine;
 pub mod report;
 pub mod sampled;
+pub mod sharp;
 pub mod sink;
 pub mod tets;
 pub mod write;
@@ -125,6 +126,19 @@ pub struct MeshOptions {
     /// thin features), which keeps volumes within 0.1 % where the chords
     /// alone lose a few percent.
     pub volume_correction: bool,
+    /// Sharp features (creases and corners) with marching cubes
+    /// ([`sharp`]; default off): a cell whose vertex normals spread by more
+    /// than 35 degrees gets a vertex where their tangent planes meet, with
+    /// its cycle fanned around it; crease segments between two such cells
+    /// of one brick are flipped onto the crease (or the two vertices merged
+    /// where they found the same stretch of crease); vertices of those
+    /// cells are moved onto the surface by Newton steps along their edges.
+    /// The volume correction then leaves the vertices of features with
+    /// flat sides, and vertices whose triangles are coplanar, where they
+    /// are. The output is deterministic for given options, but flips and
+    /// merges stop at brick faces, so it depends on the brick size there.
+    /// Ignored with [`CellMethod::Tetrahedra`].
+    pub sharp: bool,
     /// Bytes the plan's own tables may take (the brick classes, one byte a
     /// brick); default: [`microfrep_io::limits::memory_limit`]. The mesh
     /// itself is budgeted by [`memory::estimate`] and the job layer.
@@ -174,6 +188,7 @@ impl MeshOptions {
             simplify: true,
             memory_limit: None,
             volume_correction: true,
+            sharp: false,
         }
     }
 }
@@ -194,6 +209,8 @@ pub struct Plan {
     table: &'static tets::CellTable,
     /// See [`MeshOptions::volume_correction`].
     correct: bool,
+    /// See [`MeshOptions::sharp`] (false with marching tetrahedra).
+    sharp: bool,
     thin_cells: std::sync::atomic::AtomicUsize,
 }
 
@@ -256,6 +273,7 @@ impl Plan {
             simplify: opts.simplify,
             table: opts.cells.table(),
             correct: opts.volume_correction,
+            sharp: opts.sharp && opts.cells == CellMethod::Cubes,
             thin_cells: Default::default(),
         })
     }

@@ -153,6 +153,7 @@ impl Plan {
         let finish = Finish {
             h: self.grid.h,
             correct: self.correct,
+            sharp: self.sharp,
             lo: clamp.lo,
             hi: clamp.hi,
         };
@@ -204,7 +205,7 @@ impl Plan {
         let work = meshes
             .iter_mut()
             .map(|m| Work {
-                inbound: vec![[0; 5]; m.owned_keys.len()],
+                inbound: vec![[0; 6]; m.owned_keys.len()],
                 // Still in the brick's local numbering until stage A.
                 tris: std::mem::take(&mut m.tris),
                 edges: m.edges.take(),
@@ -294,7 +295,7 @@ fn stage_b(g: &mut Group, mut next: Option<&mut Group>) {
 /// Stage C: final positions of `g`'s shared vertices (corrected, then kept
 /// inside the box; the others were finished by their brick); frees what
 /// later stages do not need.
-fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp) {
+fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp, sharp: bool) {
     g.meshes
         .par_iter_mut()
         .zip(g.work.par_iter())
@@ -304,7 +305,15 @@ fn stage_c(g: &mut Group, h: f64, clamp: &BoxClamp) {
                 .iter()
                 .map(|&(_, v)| m.owned_pos[v as usize])
                 .collect();
-            apply_all(&mut p, &m.shared_acc, &w.inbound, h, clamp.lo, clamp.hi);
+            apply_all(
+                &mut p,
+                &m.shared_acc,
+                &w.inbound,
+                h,
+                clamp.lo,
+                clamp.hi,
+                sharp,
+            );
             for (&(_, v), q) in m.owned_keys.iter().zip(p) {
                 m.owned_pos[v as usize] = q;
             }
@@ -388,7 +397,7 @@ pub fn run(
             || -> Result<(), MeshError> {
                 plan.stage_a(&mut g, next.as_ref())?;
                 stage_b(&mut g, next.as_mut());
-                stage_c(&mut g, plan.grid.h, &clamp);
+                stage_c(&mut g, plan.grid.h, &clamp, plan.sharp);
                 sink.vertices(&g.verts)?;
                 match prev.take() {
                     Some(p) => emit_triangles(sink, p, Some(&g)),

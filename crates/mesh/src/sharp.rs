@@ -1,0 +1,294 @@
+//! Sharp features in the style of extended marching cubes (Kobbelt, Botsch,
+//! Schwanecke and Seidel, 2001), on the cycles of [`crate::cubes`].
+//!
+//! Marching cubes puts vertices on grid edges only, so a crease or a corner
+//! of the model that passes through a cell is cut off by the cell's
+//! triangles (chamfered). Here a cell's cycle of face segments whose vertex
+//! normals spread by more than a feature angle gets one extra vertex: the
+//! point that best fits the tangent planes at the cycle's vertices in the
+//! least-squares sense (a quadratic error function as in dual contouring,
+//! solved through the eigenvectors of its 3x3 matrix, directions with small
+//! eigenvalues left at the cycle's mass point; for a crease, the middle of
+//! the crease line's chord through the cell). It may lie up to half a cell
+//! outside its cell: a crease or corner often runs through cells whose
+//! corners are all outside, and only their neighbours see it. A cycle
+//! whose tangent planes miss the point by more than a twentieth of a cell
+//! is a smooth surface curved within the cell, not a feature.
+//!
+//! The cycle's disk is then a fan around that vertex: the same boundary,
+//! so the mesh stays closed, oriented and manifold. Two fans of
+//! neighbouring cells that share a face segment `a b` have the triangles
+//! `F1 a b` and `F2 b a`; the segment chords across the crease between the
+//! two feature vertices, and those triangles stand across it. Flipping the
+//! segment to `F1 F2` (the triangles `F1 a F2` and `F2 b F1`, [`flip`])
+//! lays a mesh edge along the crease; it keeps every edge in two triangles
+//! and is done once at most between two cells, so `F1 F2` is new. Where
+//! the flip is not proper because both cells placed their vertex on the
+//! same stretch of crease, the two vertices become one and the two
+//! triangles on the segment go: the two disks join into one (the caller,
+//! `brick`, does this within a brick). A fan with a triangle that is
+//! degenerate or faces against its crossings' normals ([`fan_ok`]), and is
+//! not flipped away, is refused: the cell keeps its old triangles.
+
+use microfrep_core::geom::{cross, dot, sub};
+
+/// Cosine of the feature angle: a cycle whose vertex normals have two
+/// directions more than this angle apart (35 degrees) is a feature.
+pub const FEATURE_COS: f64 = 0.819_152;
+
+/// Eigenvalues of the error function's matrix below this fraction of the
+/// largest are dropped (the point stays at the mass point along them).
+const TRUNCATE: f64 = 0.02;
+
+/// How far, in cells, a feature vertex may lie outside the cell whose
+/// normals found it.
+const SLACK: f64 = 0.25;
+
+/// The root mean square distance, in cells, from the feature vertex to the
+/// tangent planes above which the cycle counts as smooth.
+const RESIDUAL: f64 = 0.05;
+
+/// Smallest doubled area, in cell areas, of a fan or flipped triangle.
+const MIN_AREA: f64 = 1e-6;
+
+/// The eigenvalues and unit eigenvectors (columns) of the symmetric 3x3
+/// matrix `a`, by cyclic Jacobi rotations.
+fn eigen(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..32 {
+        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
+        let scale = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
+        if off <= 1e-15 * scale || off == 0.0 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            // The rotation in the (p, q) plane that zeroes a[p][q].
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            // Columns p and q, then rows p and q.
+            for row in a.iter_mut() {
+                let (akp, akq) = (row[p], row[q]);
+                row[p] = c * akp - s * akq;
+                row[q] = s * akp + c * akq;
+            }
+            let (rp, rq) = (a[p], a[q]);
+            for k in 0..3 {
+                a[p][k] = c * rp[k] - s * rq[k];
+                a[q][k] = s * rp[k] + c * rq[k];
+            }
+            for row in v.iter_mut() {
+                let (vp, vq) = (row[p], row[q]);
+                row[p] = c * vp - s * vq;
+                row[q] = s * vp + c * vq;
+            }
+        }
+    }
+    ([a[0][0], a[1][1], a[2][2]], v)
+}
+
+/// Whether the unit normals `ns` spread by more than the feature angle.
+pub fn is_feature(ns: &[[f64; 3]]) -> bool {
+    ns.iter()
+        .enumerate()
+        .any(|(i, a)| ns[i + 1..].iter().any(|b| dot(*a, *b) < FEATURE_COS))
+}
+
+/// A cycle whose normals spread by the feature angle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feature {
+    /// Its feature vertex (in cell units), where one is found.
+    pub point: Option<[f64; 3]>,
+    /// Whether its tangent planes meet to within [`PLANAR`] cells: the
+    /// sides of the feature are flat, and the volume correction leaves its
+    /// vertices alone.
+    pub planar: bool,
+}
+
+/// The root mean square distance, in cells, from the feature point to the
+/// tangent planes below which the sides of a feature count as flat.
+pub const PLANAR: f64 = 0.005;
+
+/// The feature vertex of a cycle with vertices `ps` (in cell units, the
+/// cell being the unit cube) and unit outward normals `ns`: the least
+/// squares meet of the tangent planes (for a crease, the middle of the
+/// crease line's chord through the cell); `None` when the normals do not
+/// spread by the feature angle or one is missing (zero). The point is left
+/// out when it lies more than half a cell outside the cell or more than
+/// `RESIDUAL` cells (root mean square) off the tangent planes. Whether the
+/// fan around it is proper is for the caller ([`fan_ok`], after flips).
+pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
+    let n = ps.len();
+    if n < 3 || ns.iter().any(|v| dot(*v, *v) < 0.5) || !is_feature(ns) {
+        return None;
+    }
+    let mut c = [0.0; 3];
+    for p in ps {
+        for k in 0..3 {
+            c[k] += p[k] / n as f64;
+        }
+    }
+    let mut a = [[0.0; 3]; 3];
+    let mut b = [0.0; 3];
+    for (p, m) in ps.iter().zip(ns) {
+        let d = dot(*m, sub(*p, c));
+        for r in 0..3 {
+            b[r] += m[r] * d;
+            for s in 0..3 {
+                a[r][s] += m[r] * m[s];
+            }
+        }
+    }
+    let (lam, v) = eigen(a);
+    let top = lam.iter().cloned().fold(0.0, f64::max);
+    let mut x = c;
+    let mut kept = 0;
+    let mut along = [0.0; 3];
+    for k in 0..3 {
+        let col = [v[0][k], v[1][k], v[2][k]];
+        if lam[k] > TRUNCATE * top {
+            kept += 1;
+            let t = dot(col, b) / lam[k];
+            for r in 0..3 {
+                x[r] += t * col[r];
+            }
+        } else {
+            along = col;
+        }
+    }
+    let x = match kept {
+        // A corner: where the planes meet, which must be in the cell.
+        3 => x,
+        // A crease: the point of its line nearest the mass point, kept
+        // within the cell (the line misses the cell: no feature here).
+        2 => {
+            let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+            for k in 0..3 {
+                if along[k].abs() > 1e-12 {
+                    let (a, b) = ((0.0 - x[k]) / along[k], (1.0 - x[k]) / along[k]);
+                    t0 = t0.max(a.min(b));
+                    t1 = t1.min(a.max(b));
+                } else if !(0.0..=1.0).contains(&x[k]) {
+                    // Parallel to the slab and outside it.
+                    t0 = f64::INFINITY;
+                }
+            }
+            // The middle of the crease's chord through the cell (a point on
+            // a face of the cell would lay the fan triangle of that face's
+            // segment into the face); where the line misses the cell, its
+            // point nearest the cell's centre.
+            let t = if t0 <= t1 && t0.is_finite() && t1.is_finite() {
+                0.5 * (t0 + t1)
+            } else {
+                dot(sub([0.5; 3], x), along)
+            };
+            std::array::from_fn(|k| x[k] + t * along[k])
+        }
+        _ => return None,
+    };
+    // Tangent planes of a crease or corner meet in the point; those of a
+    // smooth surface curved within the cell (a tube a cell or two thick)
+    // miss it by a fair part of the cell: that is no sharp feature.
+    let miss = ps
+        .iter()
+        .zip(ns)
+        .map(|(p, m)| dot(*m, sub(x, *p)).powi(2))
+        .sum::<f64>();
+    let rms = (miss / n as f64).sqrt();
+    // Outside the cell by at most `SLACK` (a crease that only grazes a cell
+    // whose corners all lie outside leaves its neighbours to place it).
+    let inside = x.iter().all(|v| (-SLACK..=1.0 + SLACK).contains(v));
+    Some(Feature {
+        point: (inside && rms <= RESIDUAL).then_some(x),
+        planar: rms <= PLANAR,
+    })
+}
+
+/// Whether the fan triangle `f a b` (positions in any common frame, `na`
+/// and `nb` the unit normals at `a` and `b`, `h` the cell size) is proper
+/// and faces along the normals at its crossings. A triangle whose
+/// crossings lie on the two sides of a feature (their normals differ by
+/// more than the feature angle) spans the crease from a face segment that
+/// cuts across it: it stands across the crease, about perpendicular to both
+/// sides, and is taken unless it turns more than 120 degrees from their
+/// mean normal (it is flipped away where the next cell has a fan too).
+pub fn fan_ok(f: [f64; 3], a: [f64; 3], b: [f64; 3], na: [f64; 3], nb: [f64; 3], h: f64) -> bool {
+    let t = cross(sub(a, f), sub(b, f));
+    let m = [na[0] + nb[0], na[1] + nb[1], na[2] + nb[2]];
+    let (lt, lm) = (dot(t, t).sqrt(), dot(m, m).sqrt());
+    let least = if dot(na, nb) < FEATURE_COS { -0.5 } else { 0.0 };
+    lt > MIN_AREA * h * h && dot(t, m) > least * lt * lm
+}
+
+/// Whether to flip the segment `a b` shared by the fan triangles `f1 a b`
+/// and `f2 b a` into `f1 a f2` and `f2 b f1` (positions in any common
+/// frame, `na` and `nb` the unit normals at `a` and `b`, `h` the cell
+/// size): both new triangles proper and facing along those normals.
+pub fn flip(
+    f1: [f64; 3],
+    f2: [f64; 3],
+    a: [f64; 3],
+    b: [f64; 3],
+    na: [f64; 3],
+    nb: [f64; 3],
+    h: f64,
+) -> bool {
+    let tri = |p: [f64; 3], q: [f64; 3], r: [f64; 3]| cross(sub(q, p), sub(r, p));
+    let (t1, t2) = (tri(f1, a, f2), tri(f2, b, f1));
+    let min = MIN_AREA * h * h;
+    let proper = |t: [f64; 3], m: [f64; 3]| dot(t, t).sqrt() > min && dot(t, m) > 0.0;
+    proper(t1, na) && proper(t2, nb)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eigen_decomposes_a_symmetric_matrix() {
+        let a = [[2.0, 1.0, 0.0], [1.0, 2.0, 0.5], [0.0, 0.5, 1.0]];
+        let (l, v) = eigen(a);
+        for k in 0..3 {
+            let col = [v[0][k], v[1][k], v[2][k]];
+            for r in 0..3 {
+                let av = a[r][0] * col[0] + a[r][1] * col[1] + a[r][2] * col[2];
+                assert!((av - l[k] * col[r]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn a_crease_point_lies_on_the_crease() {
+        // The crease x = 0.3, y = 0.4 of the block x < 0.3, y < 0.4 through
+        // a cell: the point lies on the crease line, at the mass point
+        // along it.
+        let ps = [
+            [0.0, 0.4, 0.0],
+            [0.0, 0.4, 1.0],
+            [0.3, 0.0, 1.0],
+            [0.3, 0.0, 0.0],
+        ];
+        let ns = [
+            [0.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+        ];
+        let f = feature_point(&ps, &ns).expect("a crease");
+        assert!(f.planar);
+        let x = f.point.expect("a crease point");
+        assert!(
+            (x[0] - 0.3).abs() < 1e-12 && (x[1] - 0.4).abs() < 1e-12,
+            "{x:?}"
+        );
+        assert!((x[2] - 0.5).abs() < 1e-12, "{x:?}");
+        // A plane is no feature.
+        let flat = [[1.0, 0.0, 0.0]; 4];
+        assert!(feature_point(&ps, &flat).is_none());
+    }
+}
