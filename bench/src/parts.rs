@@ -242,6 +242,7 @@ fn fill_part(pool: &rayon::ThreadPool, dir: &Path) -> Result<(), String> {
         density: Density::Constant(0.3),
         skin: Some(0.3),
         seed: 1,
+        pores: Default::default(),
     };
     let out = dir.join("torus_gyroid.stl");
     let _ = std::fs::remove_file(&out);

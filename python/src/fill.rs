@@ -89,7 +89,8 @@ fn density_of(
 /// Fills `part` (see the Python `fill`).
 #[pyfunction]
 #[pyo3(signature = (part, structure, cell, sheet=false, density=None, density_field=None,
-    density_text=None, grade=None, skin=None, seed=1, bounds=None))]
+    density_text=None, grade=None, skin=None, seed=1, bounds=None, irregularity=None,
+    parent_scale=None, subdivision=None, opening=None))]
 #[allow(clippy::too_many_arguments)]
 fn fill_part(
     py: Python<'_>,
@@ -104,7 +105,20 @@ fn fill_part(
     skin: Option<f64>,
     seed: u64,
     bounds: Option<([f64; 3], [f64; 3])>,
+    irregularity: Option<f64>,
+    parent_scale: Option<f64>,
+    subdivision: Option<String>,
+    opening: Option<f64>,
 ) -> PyResult<PyFilled> {
+    let tmesh = match subdivision.as_deref() {
+        None | Some("octree") => false,
+        Some("tmesh") => true,
+        Some(o) => {
+            return Err(errors::input(format!(
+                "fill: subdivision '{o}' is 'octree' or 'tmesh'"
+            )))
+        }
+    };
     let s = Structure::parse(structure, sheet).ok_or_else(|| {
         errors::input(format!(
             "fill: unknown structure '{structure}' (TPMS: gyroid, schwarz-p, schwarz-d, \
@@ -123,6 +137,12 @@ fn fill_part(
         density: density_of(density, density_field.as_deref(), density_text, grade)?,
         skin,
         seed,
+        pores: microfrep::fill::PoreControls {
+            irregularity,
+            parent_scale,
+            tmesh,
+            opening,
+        },
     };
     // The box as every other method finds it (an unbounded part is a
     // BoundsError naming the model), or the one given.

@@ -226,6 +226,35 @@ def test_pores_are_the_irregular_fill_and_pickle(sphere_hf):
     assert isinstance(pickle.loads(pickle.dumps(b)), mf.FilledModel)
 
 
+def test_pore_controls_are_the_clis(tmp_path, sphere_hf):
+    # Kou and Tan's controls: the same model as the CLI's with the same
+    # options, another one than the defaults, and bad values named as
+    # Python spells them.
+    part = mf.load(sphere_hf)
+    kw = dict(irregularity=0.0, parent_scale=1.8, subdivision="tmesh", opening=0.1)
+    py = mf.pores(part, 2.0, 0.4, seed=2, **kw)
+    out = tmp_path / "pores.hf"
+    cli(
+        "fill", sphere_hf, "--structure", "irregular", "--cell", 2.0, "--density", 0.4, "--seed", 2,
+        "--irregularity", 0.0, "--parent-scale", 1.8, "--subdivision", "tmesh", "--opening", 0.1,
+        "-o", out, "--json",
+    )
+    assert py.hyperfun() == out.read_text()
+    assert "mfPoreFieldOpt(" in py.hyperfun()
+    p = points(4000)
+    back = mf.load(out)
+    a, b = py.eval(p, precise=True), back.eval(p, precise=True)
+    assert np.all(np.abs(a - b) <= 1e-12 * (1 + np.abs(a)))
+    plain = mf.pores(part, 2.0, 0.4, seed=2).eval(p, precise=True)
+    assert ((plain >= 0) != (a >= 0)).sum() > 20
+    with pytest.raises(mf.InputError, match="parent_scale="):
+        mf.pores(part, 2.0, 0.4, parent_scale=9.0)
+    with pytest.raises(mf.InputError, match="irregularity="):
+        mf.fill(part, "gyroid", 2.0, 0.3, irregularity=0.2)
+    with pytest.raises(mf.InputError, match="subdivision"):
+        mf.pores(part, 2.0, 0.4, subdivision="quadtree")
+
+
 def test_fill_errors_are_the_packages(sphere_hf):
     part = mf.load(sphere_hf)
     with pytest.raises(mf.InputError, match="unknown structure 'foam'"):

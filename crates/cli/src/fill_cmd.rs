@@ -48,6 +48,24 @@ pub struct FillArgs {
     /// Seed of irregular pores (0 to 2^53).
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Irregular pores: spread of the derived polyhedra's vertices, 0 to
+    /// 0.5 (default 0.15; 0 gives identical regular pores).
+    #[arg(long)]
+    irregularity: Option<f64>,
+    /// Irregular pores: the parent polyhedron over the cell, per side, 4/3
+    /// to 2 (default 1.6).
+    #[arg(long)]
+    parent_scale: Option<f64>,
+    /// Irregular pores: `octree` (default) or `tmesh` (cells cut in two at
+    /// half their longest side).
+    #[arg(long, value_parser = ["octree", "tmesh"])]
+    subdivision: Option<String>,
+    /// Irregular pores: how far pores below 0.6274 porosity reach past
+    /// their cell's face centres (relative to the half cell), 0 to 0.25
+    /// (default 0.05: they open into their neighbours from 0.4559; 0 gives
+    /// closed pores below 0.6274).
+    #[arg(long)]
+    opening: Option<f64>,
     /// Mesh cells along the longest side, or `auto` (default): cells of at
     /// most half the skin and the walls or struts measured (walls thinner
     /// than both the design and the walls' 10th percentile are named in a
@@ -189,6 +207,12 @@ pub fn run(a: FillArgs) -> Result<()> {
         density: density_of(&a)?,
         skin: a.shell,
         seed: a.seed,
+        pores: microfrep::fill::PoreControls {
+            irregularity: a.irregularity,
+            parent_scale: a.parent_scale,
+            tmesh: a.subdivision.as_deref() == Some("tmesh"),
+            opening: a.opening,
+        },
     };
     let part_opts = LoadOptions {
         object: a.part.object.clone(),

@@ -427,3 +427,109 @@ fn the_issues_bone_fills_agree_with_independent_measurements() {
     let t = r.thinnest.unwrap();
     assert!((t.min - dia).abs() < 0.1 * dia, "{t:?} vs diameter {dia}");
 }
+
+/// Kou and Tan's controls reach the fill: irregularity 0 gives regular
+/// pores (another field than the default's), the T-mesh another one; the
+/// porosity stays on target (Monte Carlo), the `.hf` reloads to the same
+/// values, and a control on another structure is refused by name.
+#[test]
+fn pore_controls_shape_the_fills_irregular_pores() {
+    use microfrep::fill::PoreControls;
+    let d = dir("pore-controls");
+    // A block 16 x 8 x 12 mm (not a cube: the T-mesh's halving of the
+    // longest side then gives other cells than the octree).
+    let block = d.join("block.hf");
+    std::fs::write(
+        &block,
+        "my_model(x[3], a[1]) {\n  array v[3];\n  v = [0, 0, 0];\n  \
+         my_model = hfBlock(x, v, 16, 8, 12);\n}\n",
+    )
+    .unwrap();
+    let part = Part::load(
+        &block.display().to_string(),
+        &LoadOptions::default(),
+        None,
+        &quiet,
+    )
+    .unwrap();
+    let build = |pores: PoreControls| {
+        let mut opts = FillOptions::new(Structure::Irregular, 4.0, 0.4);
+        opts.pores = pores;
+        fill(&part, &opts, &quiet).unwrap()
+    };
+    let base = build(PoreControls::default());
+    let regular = build(PoreControls {
+        irregularity: Some(0.0),
+        ..Default::default()
+    });
+    let tmesh = build(PoreControls {
+        tmesh: true,
+        parent_scale: Some(1.8),
+        ..Default::default()
+    });
+    let pts = random_points(base.bounds, 2000, 3);
+    let differ = |a: &microfrep::fill::Filled, b: &microfrep::fill::Filled| {
+        let (mut ea, mut eb) = (a.model.point(), b.model.point());
+        pts.iter()
+            .filter(|&&p| (ea.eval(p) >= 0.0) != (eb.eval(p) >= 0.0))
+            .count()
+    };
+    assert!(
+        differ(&base, &regular) > 20,
+        "irregularity 0 changed nothing"
+    );
+    assert!(differ(&base, &tmesh) > 20, "the T-mesh changed nothing");
+    for f in [&regular, &tmesh] {
+        let (mc, se) = monte_carlo_density(f, 200_000, 9);
+        assert!((mc - 0.4).abs() < 0.01 + 3.0 * se, "density {mc} ± {se}");
+        let text = f.hyperfun().unwrap();
+        assert!(
+            text.contains("mfPoreFieldOpt("),
+            "{}",
+            &text[..text.len().min(600)]
+        );
+        let hf = d.join("pores.hf");
+        std::fs::write(&hf, &text).unwrap();
+        let lo = LoadOptions {
+            fields: f.binding().into_iter().collect(),
+            ..Default::default()
+        };
+        let back = load::load(&hf.display().to_string(), &lo).unwrap();
+        let (mut a, mut b) = (f.model.point(), back.shape.point());
+        let mut pore = |p: [f64; 3]| {
+            // Away from the part's surface (reloaded with its exact
+            // distance), the pores alone decide.
+            let (va, vb) = (a.eval(p), b.eval(p));
+            (va.min(1.0), vb.min(1.0))
+        };
+        let mut same = 0;
+        let inner: Vec<_> = pts
+            .iter()
+            .filter(|p| {
+                p[0] > 3.0 && p[0] < 13.0 && p[1] > 3.0 && p[1] < 5.0 && p[2] > 3.0 && p[2] < 9.0
+            })
+            .collect();
+        for &&p in &inner {
+            let (va, vb) = pore(p);
+            if (va - vb).abs() <= 1e-6 * va.abs().max(1.0) {
+                same += 1;
+            }
+        }
+        assert!(inner.len() > 50, "{} inner points", inner.len());
+        assert_eq!(same, inner.len(), "the .hf does not reload the same pores");
+    }
+    let mut opts = FillOptions::new(Structure::parse("gyroid", false).unwrap(), 4.0, 0.3);
+    opts.pores.irregularity = Some(0.3);
+    let e = fill(&part, &opts, &quiet)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("--irregularity") && e.contains("gyroid"), "{e}");
+    let mut opts = FillOptions::new(Structure::Irregular, 4.0, 0.4);
+    opts.pores.parent_scale = Some(5.0);
+    let e = fill(&part, &opts, &quiet)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("--parent-scale 5"), "{e}");
+}

@@ -143,6 +143,18 @@ pub(crate) fn parse(v: &Value) -> Result<Request, StudioError> {
             density,
             skin: number(v, "shell")?,
             seed,
+            pores: microfrep::fill::PoreControls {
+                irregularity: number(v, "irregularity")?,
+                parent_scale: number(v, "parent_scale")?,
+                tmesh: match v.get("subdivision").and_then(Value::as_str) {
+                    None | Some("octree") => false,
+                    Some("tmesh") => true,
+                    Some(o) => {
+                        return Err(bad(format!("'subdivision' '{o}' is 'octree' or 'tmesh'")))
+                    }
+                },
+                opening: number(v, "opening")?,
+            },
         },
     })
 }

@@ -1217,13 +1217,36 @@ diamond = _struts_named("diamond")
 
 
 @_recorded
-def pores(part: Shape, cell: float, density: Field, seed: int = 1, bounds: Optional[Box] = None) -> "FilledModel":
+def pores(
+    part: Shape,
+    cell: float,
+    density: Field,
+    seed: int = 1,
+    bounds: Optional[Box] = None,
+    irregularity: Optional[float] = None,
+    parent_scale: Optional[float] = None,
+    subdivision: Optional[str] = None,
+    opening: Optional[float] = None,
+) -> "FilledModel":
     """Irregular pores (Kou and Tan) in ``part``: cells of edge ``cell``,
     each with a pore made so that the part keeps relative density
     ``density`` (a number, or an expression for graded pores); ``seed``
-    fixes the randomness. ``bounds`` default to the part's. The same as
-    ``fill(part, "irregular", cell, density, seed=seed)``."""
-    return fill(part, "irregular", cell, density, seed=seed, bounds=bounds)
+    fixes the randomness. ``bounds`` default to the part's. The paper's
+    controls, as :func:`fill` takes them: ``irregularity``,
+    ``parent_scale``, ``subdivision`` ('octree' or 'tmesh'), ``opening``.
+    The same as ``fill(part, "irregular", cell, density, seed=seed, ...)``."""
+    return fill(
+        part,
+        "irregular",
+        cell,
+        density,
+        seed=seed,
+        bounds=bounds,
+        irregularity=irregularity,
+        parent_scale=parent_scale,
+        subdivision=subdivision,
+        opening=opening,
+    )
 
 
 class FilledModel(Shape):
@@ -1359,6 +1382,10 @@ def fill(
     seed: int = 1,
     grade=None,
     bounds: Optional[Box] = None,
+    irregularity: Optional[float] = None,
+    parent_scale: Optional[float] = None,
+    subdivision: Optional[str] = None,
+    opening: Optional[float] = None,
 ) -> FilledModel:
     """``part`` filled with a microstructure, as ``microfrep fill`` builds
     it (the one fill of the library: the same model and the same values).
@@ -1376,7 +1403,12 @@ def fill(
     ``depth`` further in. ``skin``: a solid wall of that thickness in
     millimetres (a true distance for every part: a mesh's or scan's
     distance, a Newton estimate of it for a formula). ``bounds`` replace
-    the part's box.
+    the part's box. Kou and Tan's controls of the irregular pores:
+    ``irregularity`` (0 to 0.5, default 0.15), ``parent_scale`` (the
+    parent polyhedron over the cell, 4/3 to 2, default 1.6) and
+    ``subdivision`` ('octree', the default, or 'tmesh') and ``opening``
+    (0 to 0.25, default 0.05: how far pores below 0.6274 porosity reach
+    past their cell's faces, so that they open into their neighbours).
 
     Returns a :class:`FilledModel`: the model on the part's box, with
     :meth:`~FilledModel.report` (the measured figures) and
@@ -1426,6 +1458,10 @@ def fill(
         skin=skin,
         seed=int(seed),
         bounds=_box(bounds),
+        irregularity=None if irregularity is None else float(irregularity),
+        parent_scale=None if parent_scale is None else float(parent_scale),
+        subdivision=subdivision,
+        opening=None if opening is None else float(opening),
         **kw,
     )
     return FilledModel(f)

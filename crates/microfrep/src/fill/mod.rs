@@ -168,6 +168,68 @@ pub struct FillOptions {
     pub skin: Option<f64>,
     /// Seed of the irregular pores (0 to 2^53).
     pub seed: u64,
+    /// Kou and Tan's controls of the irregular pores (the paper's
+    /// defaults unless set).
+    pub pores: PoreControls,
+}
+
+/// Kou and Tan's controls of the irregular pores; `None` keeps the
+/// paper's value (the defaults of [`microfrep_pores::Options`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PoreControls {
+    /// Spread of the derived polyhedra's vertices, in [0, 0.5] (0.15): 0
+    /// gives identical regular pores.
+    pub irregularity: Option<f64>,
+    /// The parent polyhedron over the cell, per side, in [4/3, 2] (1.6).
+    pub parent_scale: Option<f64>,
+    /// T-mesh subdivision (cells cut in two at half their longest side)
+    /// instead of the octree.
+    pub tmesh: bool,
+    /// How far a pore below the Doo-Sabin pore's face-touching porosity
+    /// (0.6274) reaches past its cell's face centres, relative to the half
+    /// cell, in [0, 0.25] (0.05: pores open into their neighbours from
+    /// 0.4559 porosity; 0 gives the plain construction).
+    pub opening: Option<f64>,
+}
+
+impl PoreControls {
+    /// Whether every control keeps the paper's value.
+    pub fn is_default(&self) -> bool {
+        *self == PoreControls::default()
+    }
+
+    /// The pores' build options.
+    pub fn options(&self) -> microfrep_pores::Options {
+        let mut o = microfrep_pores::Options::default();
+        if let Some(i) = self.irregularity {
+            o.irregularity = i;
+        }
+        if self.parent_scale.is_some() {
+            o.parent_scale = self.parent_scale;
+        }
+        if self.tmesh {
+            o.subdivision = microfrep_pores::Subdivision::TMesh { percent: 0.5 };
+        }
+        if let Some(v) = self.opening {
+            o.opening = v;
+        }
+        o
+    }
+
+    /// The options array of HyperFun's `mfPoreFieldOpt` (as `mfPoresOpt`
+    /// takes it): `[irregularity, parent_scale, subdivision, weight,
+    /// size_measure, opening]`.
+    pub fn hyperfun_array(&self) -> Vec<f64> {
+        let o = self.options();
+        vec![
+            o.irregularity,
+            o.parent_scale.unwrap_or(microfrep_pores::pore3::KAPPA),
+            if self.tmesh { 1.0 } else { 0.0 },
+            1.0,
+            0.0,
+            o.opening,
+        ]
+    }
 }
 
 impl FillOptions {
@@ -179,6 +241,7 @@ impl FillOptions {
             density: Density::Constant(density),
             skin: None,
             seed: 1,
+            pores: PoreControls::default(),
         }
     }
 }
@@ -361,10 +424,15 @@ pub fn fill(part: &Part, opts: &FillOptions, progress: Progress) -> Result<Fille
                 microfrep_pores::Spec::Constant(c),
                 microfrep_pores::Spec::from(porosity.clone()),
                 opts.seed,
-                &microfrep_pores::Options::default(),
+                &opts.pores.options(),
                 &|d, n| progress("making the pores", d, n),
             )
-            .map_err(|e| FillError::Build(format!("irregular pores: {e}")))?;
+            .map_err(|e| match e {
+                microfrep_pores::PoreError::Option { name, value, why } => {
+                    bad(format!("⟨{}⟩ {value}: {why}", name.replace('_', "-")))
+                }
+                e => FillError::Build(format!("irregular pores: {e}")),
+            })?;
             design.pores = Some((built.pores, built.dropped));
             let field: Arc<dyn Field> = built.field.clone();
             pores = Some(PoreBuild {
@@ -483,6 +551,13 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
                 "⟨shell⟩ {t} leaves no core: the part's smallest side is {smallest:.4}"
             )));
         }
+    }
+    if !opts.pores.is_default() && opts.structure != Structure::Irregular {
+        return Err(bad(format!(
+            "⟨irregularity⟩, ⟨parent-scale⟩, ⟨subdivision⟩ and ⟨opening⟩ shape irregular \
+             pores; the structure is {}",
+            opts.structure.name()
+        )));
     }
     if opts.seed >= 1 << 53 {
         return Err(bad(format!(
@@ -688,6 +763,7 @@ impl Filled {
         let b = self.bounds;
         let c = self.options.cell;
         let seed = self.options.seed as f64;
+        let controls = self.options.pores.clone();
         let names = move |f: &Arc<dyn Field>, comp: u8| {
             use microfrep_hyperfun::printer::{FieldArg, FieldCall};
             if let Some((pf, name)) = &part_field {
@@ -700,18 +776,25 @@ impl Filled {
             }
             if let Some(pb) = &pores {
                 if Arc::ptr_eq(f, &pb.field) && comp == 0 {
+                    let mut args = vec![
+                        FieldArg::Point,
+                        FieldArg::Expr(p.clone()),
+                        FieldArg::Expr(Expr::constant(c)),
+                        FieldArg::Expr(pb.porosity.clone()),
+                        FieldArg::Expr(Expr::constant(seed)),
+                        FieldArg::Array(vec![
+                            b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2],
+                        ]),
+                    ];
+                    let name = if controls.is_default() {
+                        "mfPoreField"
+                    } else {
+                        args.push(FieldArg::Array(controls.hyperfun_array()));
+                        "mfPoreFieldOpt"
+                    };
                     return Some(FieldCall {
-                        name: "mfPoreField".into(),
-                        args: vec![
-                            FieldArg::Point,
-                            FieldArg::Expr(p.clone()),
-                            FieldArg::Expr(Expr::constant(c)),
-                            FieldArg::Expr(pb.porosity.clone()),
-                            FieldArg::Expr(Expr::constant(seed)),
-                            FieldArg::Array(vec![
-                                b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2],
-                            ]),
-                        ],
+                        name: name.into(),
+                        args,
                     });
                 }
             }
@@ -740,6 +823,17 @@ impl Filled {
                 None => "no skin".into(),
             }
         ));
+        if !o.pores.is_default() {
+            let a = o.pores.hyperfun_array();
+            head.push_str(&format!(
+                "-- Kou-Tan controls: irregularity {}, parent scale {}, {} subdivision, \
+                 opening {}.\n",
+                a[0],
+                a[1],
+                if o.pores.tmesh { "T-mesh" } else { "octree" },
+                a[5]
+            ));
+        }
         head.push_str(&format!(
             "-- The part's box: [{}, {}, {}] .. [{}, {}, {}].\n",
             b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]

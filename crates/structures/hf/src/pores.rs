@@ -179,17 +179,28 @@ fn pore_field(a: &[Arg]) -> Output {
             v[i] = e.as_const().ok_or_else(Output::needs_constants)?;
         }
         let bounds = [[v[0], v[1], v[2]], [v[3], v[4], v[5]]];
+        let options = match a.get(6) {
+            Some(o) => opts(o, Dim::Three)?,
+            None => Options::default(),
+        };
         let built = Pores::build(
             &part,
             bounds,
             Spec::from(a[2].real()),
             Spec::from(a[3].real()),
             seed,
-            &Options::default(),
+            &options,
         )
-        .map_err(|e| Output::error(e.to_string()))?;
+        .map_err(|e| build_error(e, a.len() > 6))?;
         Ok(Output::value(Expr::field_at(built.field, x)))
     })
+}
+
+/// `mfPoreFieldOpt(x, F, size, porosity, seed, box, opts)`: `mfPoreField`
+/// with the options array of `mfPoresOpt` ([`opts`]), as `microfrep fill`
+/// writes it when the paper's controls are set.
+fn pore_field_opt(a: &[Arg]) -> Output {
+    pore_field(a)
 }
 
 /// `mfPores(x, F, size, porosity, seed)`.
@@ -222,4 +233,5 @@ pub(crate) fn register(r: &mut Registry) {
     r.register("mfporesopt", &[A, R, R, R, R, A], pores3_opt);
     r.register("mfpores2opt", &[A, R, R, R, R, A], pores2_opt);
     r.register("mfporefield", &[A, R, R, R, R, A], pore_field);
+    r.register("mfporefieldopt", &[A, R, R, R, R, A, A], pore_field_opt);
 }
