@@ -243,6 +243,7 @@ fn fill_part(pool: &rayon::ThreadPool, dir: &Path) -> Result<(), String> {
         skin: Some(0.3),
         seed: 1,
         pores: Default::default(),
+        material_layers: Vec::new(),
     };
     let out = dir.join("torus_gyroid.stl");
     let _ = std::fs::remove_file(&out);

@@ -31,6 +31,7 @@ fn python_option(name: &str) -> String {
         "density-grade" => "grade=".into(),
         "density-expr" => "density= (an expression text)".into(),
         "sheet" => "solid='sheet'".into(),
+        "material-layer" => "material_layers=".into(),
         n => format!("{}=", n.replace('-', "_")),
     }
 }
@@ -90,7 +91,7 @@ fn density_of(
 #[pyfunction]
 #[pyo3(signature = (part, structure, cell, sheet=false, density=None, density_field=None,
     density_text=None, grade=None, skin=None, seed=1, bounds=None, irregularity=None,
-    parent_scale=None, subdivision=None, opening=None))]
+    parent_scale=None, subdivision=None, opening=None, material_layers=None))]
 #[allow(clippy::too_many_arguments)]
 fn fill_part(
     py: Python<'_>,
@@ -109,6 +110,7 @@ fn fill_part(
     parent_scale: Option<f64>,
     subdivision: Option<String>,
     opening: Option<f64>,
+    material_layers: Option<Vec<(f64, f64)>>,
 ) -> PyResult<PyFilled> {
     let tmesh = match subdivision.as_deref() {
         None | Some("octree") => false,
@@ -143,6 +145,11 @@ fn fill_part(
             tmesh,
             opening,
         },
+        material_layers: material_layers
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(depth, ramp)| microfrep::fill::MaterialLayer { depth, ramp })
+            .collect(),
     };
     // The box as every other method finds it (an unbounded part is a
     // BoundsError naming the model), or the one given.

@@ -192,18 +192,23 @@ pub fn frame(loaded: &Loaded, m: &ModelArgs, run: &RunArgs) -> Result<Bounds> {
     b.with_context(|| format!("model '{}'", m.model))
 }
 
-/// Parses `xmin,ymin,zmin,xmax,ymax,zmax` for option `flag`: six finite
-/// numbers with min < max on every axis, within what f32 grids represent.
-pub fn parse_box(flag: &str, s: &str) -> Result<([f64; 3], [f64; 3])> {
-    let v: Vec<f64> = s
-        .split(',')
+/// Parses comma-separated numbers for option `flag`, naming the one that
+/// is not a number.
+pub fn parse_numbers(flag: &str, s: &str) -> Result<Vec<f64>> {
+    s.split(',')
         .enumerate()
         .map(|(i, t)| {
             t.trim()
                 .parse::<f64>()
                 .with_context(|| format!("{flag}: value {} ('{t}') is not a number", i + 1))
         })
-        .collect::<Result<_>>()?;
+        .collect()
+}
+
+/// Parses `xmin,ymin,zmin,xmax,ymax,zmax` for option `flag`: six finite
+/// numbers with min < max on every axis, within what f32 grids represent.
+pub fn parse_box(flag: &str, s: &str) -> Result<([f64; 3], [f64; 3])> {
+    let v = parse_numbers(flag, s)?;
     if v.len() != 6 {
         bail!(
             "{flag} needs 6 numbers xmin,ymin,zmin,xmax,ymax,zmax, got {}",

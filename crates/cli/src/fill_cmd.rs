@@ -66,6 +66,14 @@ pub struct FillArgs {
     /// closed pores below 0.6274).
     #[arg(long)]
     opening: Option<f64>,
+    /// Park's material subspace DEPTH,RAMP below the part's surface
+    /// (repeatable): layer k is material k, its fraction rising from 0 at
+    /// DEPTH mm to 1 at DEPTH + RAMP mm (later layers over earlier ones),
+    /// material 0 the rest; the channels s[1..] of a .3mf with
+    /// --volumetric or --palette (the palette lists layer 1 .. K, then
+    /// material 0).
+    #[arg(long, value_name = "DEPTH,RAMP")]
+    material_layer: Vec<String>,
     /// Mesh cells along the longest side, or `auto` (default): cells of at
     /// most half the skin and the walls or struts measured (walls thinner
     /// than both the design and the walls' 10th percentile are named in a
@@ -194,6 +202,13 @@ pub fn run(a: FillArgs) -> Result<()> {
             bail!("--min-wall {w} must be a positive thickness");
         }
     }
+    if !a.material_layer.is_empty() && (kind != Output::Mesh || a.volume.is_empty()) {
+        bail!(
+            "--material-layer makes attribute channels, which only a .3mf with --volumetric or \
+             --palette carries: they would be lost in {}",
+            a.output.display()
+        );
+    }
     let volume = match kind {
         Output::Mesh => a.volume.options(&a.output)?,
         _ if !a.volume.is_empty() => {
@@ -213,6 +228,17 @@ pub fn run(a: FillArgs) -> Result<()> {
             tmesh: a.subdivision.as_deref() == Some("tmesh"),
             opening: a.opening,
         },
+        material_layers: a
+            .material_layer
+            .iter()
+            .map(|t| {
+                let v = crate::common::parse_numbers("--material-layer", t)?;
+                match v[..] {
+                    [depth, ramp] => Ok(microfrep::fill::MaterialLayer { depth, ramp }),
+                    _ => bail!("--material-layer {t}: give DEPTH,RAMP (millimetres)"),
+                }
+            })
+            .collect::<Result<Vec<_>>>()?,
     };
     let part_opts = LoadOptions {
         object: a.part.object.clone(),

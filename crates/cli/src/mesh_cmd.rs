@@ -43,6 +43,13 @@ pub struct MeshArgs {
     /// or tets (marching tetrahedra: sharp creases cut less).
     #[arg(long, value_enum, default_value_t = Cells::Cubes)]
     cells: Cells,
+    /// Keep creases and corners (CAD parts, CSG): where the normals in a
+    /// cell spread, a vertex where the tangent planes meet; flat faces stay
+    /// flat. Corners and faces come out exact; some crease stretches are
+    /// still cut by up to half a cell, and feature-rich lattices mesh a few
+    /// times slower. With --cells cubes only.
+    #[arg(long)]
+    sharp: bool,
     /// Write a strut lattice model (mfStruts at the plain point, constant
     /// cell and radius, alone or `&` a part) to .3mf as triangles instead
     /// of a beam lattice (implied by --color-by and the volumetric options).
@@ -137,6 +144,10 @@ pub fn run(a: MeshArgs) -> Result<()> {
         Cells::Cubes => CellMethod::Cubes,
         Cells::Tets => CellMethod::Tetrahedra,
     };
+    if a.sharp && opts.cells != CellMethod::Cubes {
+        anyhow::bail!("--sharp places feature vertices in marching cubes: drop --cells tets");
+    }
+    opts.sharp = a.sharp;
     let bar = a.run.bar("bricks");
     bar.set_message("meshing");
     let progress = |done: usize, total: usize| {

@@ -114,3 +114,34 @@ fn bad_inputs_are_errors() {
         assert!(err.contains("error"), "{args:?}: {err}");
     }
 }
+
+/// Kou and Tan's controls from the command line: `analyze` of a model with
+/// rational 2D pores (`mfPores2Opt`, weight sqrt(2)/2) measures the
+/// porosity it was built for, and a bad weight is refused with the
+/// element it names.
+#[test]
+fn rational_pores_from_a_model_file_keep_their_porosity() {
+    let src = |w: &str| {
+        format!(
+            "my_model(x[3], a[1]) {{\n  array v[3], o[4];\n  v = [0, 0, 0];\n  \
+             o = [0.15, 1, 0, {w}];\n  b = hfBlock(x, v, 4, 4, 1);\n  \
+             my_model = mfPores2Opt(x, b, 1, 0.6, 1, o);\n}}\n"
+        )
+    };
+    let m = model("rational_pores.hf", &src("0.7071067811865476"));
+    let v = json(&[
+        &m,
+        "--bounds",
+        "0,0,0,4,4,1",
+        "--resolution",
+        "256",
+        "--json",
+        "--no-thickness",
+    ]);
+    let f = v["volume_fraction"]["value"].as_f64().unwrap();
+    let e = v["volume_fraction"]["error"].as_f64().unwrap_or(0.0);
+    assert!((f - 0.4).abs() < 0.003 + e, "{f} ± {e}");
+    let bad = model("bad_weight.hf", &src("0"));
+    let (code, _, err) = run(&[&bad, "--json"]);
+    assert!(code != 0 && err.contains("weight"), "{err}");
+}

@@ -234,3 +234,72 @@ fn a_mesh_too_large_for_the_machine_is_refused_before_it_is_written() {
     assert_eq!(left.len(), 1, "only the part is left: {left:?}");
     assert!(t.elapsed().as_secs() < 120, "{:?}", t.elapsed());
 }
+
+/// `--material-layer` writes attribute channels into a .3mf with a
+/// palette, and is refused where they would be lost.
+#[test]
+fn material_layers_reach_a_3mf_palette_and_are_refused_elsewhere() {
+    let d = dir("layers");
+    let part = ball(&d);
+    let out = d.join("f.3mf");
+    let j = fill_json(
+        &[
+            &part,
+            "--structure",
+            "gyroid",
+            "--cell",
+            "4",
+            "--density",
+            "0.3",
+            "--material-layer",
+            "1,2",
+            "--material-layer",
+            "5,1",
+            "--palette",
+            "outer=#ff0000,inner=#00ff00,skin=#0000ff",
+        ],
+        &out,
+    );
+    assert_eq!(
+        j["written"]["volumetric"]["attributes"],
+        serde_json::json!(2),
+        "{j}"
+    );
+    assert_eq!(
+        j["written"]["volumetric"]["materials"],
+        serde_json::json!(3),
+        "{j}"
+    );
+    for (args, says) in [
+        (vec!["-o", d.join("f.stl").to_str().unwrap()], "only a .3mf"),
+        (vec!["-o", d.join("g.3mf").to_str().unwrap()], "only a .3mf"),
+        (
+            vec![
+                "--material-layer",
+                "1",
+                "-o",
+                d.join("h.3mf").to_str().unwrap(),
+                "--volumetric",
+            ],
+            "DEPTH,RAMP",
+        ),
+    ] {
+        let o = Command::new(bin())
+            .args([
+                "fill",
+                &part,
+                "--structure",
+                "gyroid",
+                "--cell",
+                "4",
+                "--density",
+                "0.3",
+            ])
+            .args(["--material-layer", "1,2"])
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
+    }
+}

@@ -517,3 +517,58 @@ fn eval_flags_after_negative_coordinates_and_fields_bound_twice() {
     ]);
     assert!(code != 0 && err.contains("bound twice"), "{err}");
 }
+
+/// `mesh --sharp` keeps a CAD part's faces where they are: an axis cube
+/// of side 2 meshed at 20 cells has its box at +-1 within 0.02 cells, where
+/// the default's volume correction pushes the faces out by about 0.2
+/// cells; a tets mesh with --sharp is refused.
+#[test]
+fn sharp_meshes_keep_a_cubes_faces_on_their_planes() {
+    let d = dir("sharp");
+    let m = d.join("cube.hf");
+    std::fs::write(
+        &m,
+        "my_model(x[3], a[1]) {\n  my_model = min(min(1 - abs(x[1]), 1 - abs(x[2])), 1 - abs(x[3]));\n}\n",
+    )
+    .unwrap();
+    let mesh = |extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "mesh",
+            m.to_str().unwrap(),
+            "--bounds",
+            "-1.2,-1.2,-1.2,1.2,1.2,1.2",
+            "--resolution",
+            "25",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        ok(&args);
+        stl_box(out)
+    };
+    // Cells of 0.096: the faces fall between grid nodes.
+    let h = 2.4 / 25.0;
+    let plain = mesh(&[], &d.join("plain.stl"));
+    let sharp = mesh(&["--sharp"], &d.join("sharp.stl"));
+    let off = |b: [[f64; 3]; 2]| {
+        (0..3)
+            .map(|a| (b[0][a] + 1.0).abs().max((b[1][a] - 1.0).abs()))
+            .fold(0.0, f64::max)
+            / h
+    };
+    assert!(off(sharp) < 0.02, "sharp box {sharp:?}");
+    assert!(
+        off(plain) > 0.05,
+        "the default's box {plain:?} (the test would not tell)"
+    );
+    let (code, _, err) = run(&[
+        "mesh",
+        m.to_str().unwrap(),
+        "--cells",
+        "tets",
+        "--sharp",
+        "-o",
+        d.join("t.stl").to_str().unwrap(),
+    ]);
+    assert!(code != 0 && err.contains("--sharp"), "{err}");
+}

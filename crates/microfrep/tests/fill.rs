@@ -533,3 +533,90 @@ fn pore_controls_shape_the_fills_irregular_pores() {
         .to_string();
     assert!(e.contains("--parent-scale 5"), "{e}");
 }
+
+/// Park's material subspaces in the fill: two layers below a cube's
+/// surface give the attribute channels of the closed form, by the cube's
+/// exact distance to its faces (later layers over earlier ones, the
+/// primary material the rest, nothing outside the part).
+#[test]
+fn material_layers_grade_the_fill_by_depth_below_the_surface() {
+    use microfrep::fill::MaterialLayer;
+    let d = dir("layers");
+    let cube = cube_stl(&d, 16.0);
+    let part = Part::load(&cube, &LoadOptions::default(), None, &quiet).unwrap();
+    let mut opts = FillOptions::new(Structure::parse("gyroid", false).unwrap(), 4.0, 0.3);
+    opts.material_layers = vec![
+        MaterialLayer {
+            depth: 1.0,
+            ramp: 2.0,
+        },
+        MaterialLayer {
+            depth: 5.0,
+            ramp: 1.0,
+        },
+    ];
+    let f = fill(&part, &opts, &quiet).unwrap();
+    let attrs = f.model.attributes();
+    assert_eq!(
+        attrs.iter().map(|a| a.name.as_str()).collect::<Vec<_>>(),
+        ["s1", "s2"]
+    );
+    let mut s1 = microfrep::Shape::new(attrs[0].expr.clone()).point();
+    let mut s2 = microfrep::Shape::new(attrs[1].expr.clone()).point();
+    let mut checked = 0;
+    let b = Bounds::new([-2.0; 3], [18.0; 3]);
+    for p in random_points(b, 4000, 5) {
+        let faces: Vec<f64> = (0..3).flat_map(|a| [p[a], 16.0 - p[a]]).collect();
+        let depth = faces.iter().copied().fold(f64::INFINITY, f64::min);
+        let (w1, w2) = ((depth - 1.0) / 2.0, depth - 5.0);
+        let (e1, e2) = if depth < 0.0 {
+            (0.0, 0.0)
+        } else if depth >= 5.0 {
+            (0.0, w2.clamp(0.0, 1.0))
+        } else if depth >= 1.0 {
+            (w1.clamp(0.0, 1.0), 0.0)
+        } else {
+            (0.0, 0.0)
+        };
+        // Away from the layer boundaries (where a sampled depth may fall on
+        // either side) and from the medial planes of the box, where its
+        // distance has a crease that the fill's sampled depth (steps of an
+        // eighth of a cell, 0.5 mm) rounds off.
+        let mut sorted = faces.clone();
+        sorted.sort_by(f64::total_cmp);
+        if [0.0, 1.0, 5.0].iter().any(|&z| (depth - z).abs() < 0.05) || sorted[1] - sorted[0] < 0.75
+        {
+            continue;
+        }
+        let (g1, g2) = (s1.eval(p), s2.eval(p));
+        assert!(
+            (g1 - e1).abs() < 0.02 && (g2 - e2).abs() < 0.02,
+            "at {p:?} (depth {depth}): s1 {g1} s2 {g2}, want {e1} {e2}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 1500, "{checked}");
+    assert!(f
+        .hyperfun()
+        .err()
+        .expect("refused")
+        .to_string()
+        .contains("--material-layer"));
+    for bad in [
+        MaterialLayer {
+            depth: -1.0,
+            ramp: 1.0,
+        },
+        MaterialLayer {
+            depth: 1.0,
+            ramp: 0.0,
+        },
+    ] {
+        opts.material_layers = vec![bad];
+        let e = fill(&part, &opts, &quiet)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(e.contains("--material-layer 1"), "{e}");
+    }
+}

@@ -155,6 +155,8 @@ pub(crate) fn parse(v: &Value) -> Result<Request, StudioError> {
                 },
                 opening: number(v, "opening")?,
             },
+            // Attribute channels, which the HyperFun answer cannot carry.
+            material_layers: Vec::new(),
         },
     })
 }

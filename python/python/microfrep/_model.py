@@ -1386,6 +1386,7 @@ def fill(
     parent_scale: Optional[float] = None,
     subdivision: Optional[str] = None,
     opening: Optional[float] = None,
+    material_layers: Optional[Sequence[Tuple[float, float]]] = None,
 ) -> FilledModel:
     """``part`` filled with a microstructure, as ``microfrep fill`` builds
     it (the one fill of the library: the same model and the same values).
@@ -1409,6 +1410,11 @@ def fill(
     ``subdivision`` ('octree', the default, or 'tmesh') and ``opening``
     (0 to 0.25, default 0.05: how far pores below 0.6274 porosity reach
     past their cell's faces, so that they open into their neighbours).
+    ``material_layers``: Park's material subspaces below the surface, a
+    list of ``(depth, ramp)`` in millimetres; layer k is material k, its
+    fraction rising from 0 at ``depth`` to 1 at ``depth + ramp`` (later
+    layers over earlier ones), material 0 the rest; they are the model's
+    attribute channels s1..sK.
 
     Returns a :class:`FilledModel`: the model on the part's box, with
     :meth:`~FilledModel.report` (the measured figures) and
@@ -1462,6 +1468,7 @@ def fill(
         parent_scale=None if parent_scale is None else float(parent_scale),
         subdivision=subdivision,
         opening=None if opening is None else float(opening),
+        material_layers=None if material_layers is None else [(float(d), float(r)) for d, r in material_layers],
         **kw,
     )
     return FilledModel(f)

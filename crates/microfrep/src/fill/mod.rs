@@ -171,6 +171,23 @@ pub struct FillOptions {
     /// Kou and Tan's controls of the irregular pores (the paper's
     /// defaults unless set).
     pub pores: PoreControls,
+    /// Park's material subspaces below the part's surface: layer `k`
+    /// (from 1) is material `k`, the part's primary material 0 the rest;
+    /// they become the filled model's attribute channels `s1..sK`.
+    pub material_layers: Vec<MaterialLayer>,
+}
+
+/// A material subspace below the part's surface (Park et al. Sec. 2.3,
+/// 3.1, as [`microfrep_graded::subspace::Subspace::below_surface`]): from
+/// `depth` millimetres below the surface its material's fraction rises
+/// linearly to 1 over `ramp` millimetres, and stays 1 deeper; a later
+/// layer overrides an earlier one where it has begun.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MaterialLayer {
+    /// Depth below the part's surface where the layer begins (mm, >= 0).
+    pub depth: f64,
+    /// Length of the ramp from 0 to all of the layer's material (mm, > 0).
+    pub ramp: f64,
 }
 
 /// Kou and Tan's controls of the irregular pores; `None` keeps the
@@ -242,6 +259,7 @@ impl FillOptions {
             skin: None,
             seed: 1,
             pores: PoreControls::default(),
+            material_layers: Vec::new(),
         }
     }
 }
@@ -459,6 +477,30 @@ pub fn fill(part: &Part, opts: &FillOptions, progress: Progress) -> Result<Fille
     for a in part.shape.attributes() {
         model_shape = model_shape.with_attribute(&a.name, a.expr.clone());
     }
+    if !opts.material_layers.is_empty() {
+        use microfrep_graded::subspace::{MaterialModel, Subspace};
+        let k = opts.material_layers.len();
+        let mut m =
+            MaterialModel::new(k + 1, 0).map_err(|e| bad(format!("⟨material-layer⟩: {e}")))?;
+        for (i, l) in opts.material_layers.iter().enumerate() {
+            // The layer's fraction is its depth coordinate w, which rises
+            // from 0 to 1 over the ramp.
+            let s = Subspace::below_surface(
+                &d,
+                l.depth,
+                l.ramp,
+                [x[0].clone(), x[1].clone()],
+                Expr::z(),
+                i + 1,
+            );
+            m.push(s)
+                .map_err(|e| bad(format!("⟨material-layer⟩: {e}")))?;
+        }
+        let fractions = m.fractions(&p);
+        for (i, e) in fractions.into_iter().enumerate().skip(1) {
+            model_shape = model_shape.with_attribute(&format!("s{i}"), e);
+        }
+    }
     let mut notes = part.notes.clone();
     if let (Structure::Irregular, Some((made, _))) = (opts.structure, design.pores) {
         if made < 8 {
@@ -492,11 +534,20 @@ fn depth_cap(part: &Part, opts: &FillOptions) -> f64 {
     let size = part.bounds.size();
     let diag = (size[0].powi(2) + size[1].powi(2) + size[2].powi(2)).sqrt();
     let skin = opts.skin.unwrap_or(0.0);
-    match &opts.density {
+    let cap = match &opts.density {
         Density::Constant(_) | Density::Field(_) => 2.0 * skin + opts.cell,
         Density::Graded { depth, .. } => 2.0 * (skin + depth) + opts.cell,
         Density::Expression(_) => diag,
-    }
+    };
+    cap.max(2.0 * layers_depth(opts) + opts.cell)
+}
+
+/// The depth below which every material layer is whole.
+fn layers_depth(opts: &FillOptions) -> f64 {
+    opts.material_layers
+        .iter()
+        .map(|l| l.depth + l.ramp)
+        .fold(0.0, f64::max)
 }
 
 /// How deep the model reads the depth's value (below that only "deeper"
@@ -504,11 +555,12 @@ fn depth_cap(part: &Part, opts: &FillOptions) -> f64 {
 /// ramp for a graded one, everywhere for an expression.
 fn depth_needed(part: &Part, opts: &FillOptions) -> f64 {
     let skin = opts.skin.unwrap_or(0.0);
-    match &opts.density {
+    let needed = match &opts.density {
         Density::Constant(_) | Density::Field(_) => skin,
         Density::Graded { depth, .. } => skin + depth,
         Density::Expression(_) => depth_cap(part, opts),
-    }
+    };
+    needed.max(layers_depth(opts))
 }
 
 fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
@@ -558,6 +610,26 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
              pores; the structure is {}",
             opts.structure.name()
         )));
+    }
+    for (i, l) in opts.material_layers.iter().enumerate() {
+        if !(l.depth.is_finite() && l.depth >= 0.0 && l.ramp.is_finite() && l.ramp > 0.0) {
+            return Err(bad(format!(
+                "⟨material-layer⟩ {} ({},{}): the depth must be 0 or more and the ramp positive \
+                 (millimetres)",
+                i + 1,
+                l.depth,
+                l.ramp
+            )));
+        }
+    }
+    if opts.material_layers.len() > 254 {
+        return Err(bad("⟨material-layer⟩: at most 254 layers (255 materials)"));
+    }
+    if !opts.material_layers.is_empty() && !part.shape.attributes().is_empty() {
+        return Err(bad(
+            "⟨material-layer⟩ gives the model its attribute channels, and the part has its own: \
+             drop one",
+        ));
     }
     if opts.seed >= 1 << 53 {
         return Err(bad(format!(
@@ -757,6 +829,12 @@ impl Filled {
     /// scan part is called as `part(x)`, bound when loading with
     /// `--field part=FILE`, as the header says).
     pub fn hyperfun(&self) -> Result<String, FillError> {
+        if !self.options.material_layers.is_empty() {
+            return Err(bad(
+                "the ⟨material-layer⟩s are attribute channels of the model, which its HyperFun \
+                 form does not carry yet: write a .3mf with --volumetric or --palette",
+            ));
+        }
         let part_field = self.part_form.field();
         let pores = self.pores.clone();
         let p = self.part.value().clone();
