@@ -287,13 +287,16 @@ def test_material_layers_are_channels_graded_by_depth(sphere_hf):
     # Newton estimate of the distance, 4 - r): s1 rises from 0 at 0.5 mm to
     # 1 at 1.5 mm, and is 0 outside the ball.
     f = mf.fill(mf.load(sphere_hf), "gyroid", CELL, 0.3, material_layers=[(0.5, 1.0)])
-    assert f.attribute_names() == ["s1"]
+    assert f.attribute_names == ["s1"]
     p = points(4000)
     depth = RADIUS - np.linalg.norm(p, axis=1)
     s1 = f.attributes(p)["s1"]
     want = np.where(depth < 0, 0.0, np.clip((depth - 0.5) / 1.0, 0.0, 1.0))
     keep = np.abs(depth) > 0.05
-    assert np.max(np.abs(s1[keep] - want[keep])) < 0.02
+    # The depth of a formula part is a Newton estimate of the distance,
+    # within 1 % below the skin's depth; s1 follows it over its 1 mm ramp.
+    err = np.abs(s1[keep] - want[keep])
+    assert np.all(err <= 0.005 + 0.012 * np.abs(depth[keep])), np.max(err)
     with pytest.raises(mf.InputError, match="material_layers="):
         mf.fill(mf.load(sphere_hf), "gyroid", CELL, 0.3, material_layers=[(0.5, -1.0)])
 
