@@ -291,7 +291,9 @@ pub fn run(a: FillArgs) -> Result<()> {
         }
     }
     let b = f.bounds;
-    let write = |r: &mut FillReport| -> Result<serde_json::Value> {
+    // `gate` runs before the mesh is moved onto the output: nothing is
+    // committed before every measurement has succeeded.
+    let write = |r: &mut FillReport, gate: &dyn Fn() -> Result<()>| -> Result<serde_json::Value> {
         Ok(match kind {
             Output::HyperFun => {
                 let text = f.hyperfun()?;
@@ -327,7 +329,7 @@ pub fn run(a: FillArgs) -> Result<()> {
                 if let Some(area) = r.surface_estimate() {
                     check_mesh_size(area, b, n)?;
                 }
-                let (s, shells) = mesh_checked(&a, &f, b, n)?;
+                let (s, shells) = mesh_checked(&a, &f, b, n, gate)?;
                 if let Some(t) = &r.thinnest {
                     if t.min < 2.0 * s.cell {
                         r.notes.push(format!(
@@ -360,28 +362,42 @@ pub fn run(a: FillArgs) -> Result<()> {
         })
     };
     // The whole part's connectivity does not change what is written, so
-    // it is measured beside the writing (each uses the threads the other
-    // leaves idle) and the report waits for both. It measures the part's
-    // volume, which the mesh's size check needs: where the part's box
-    // alone does not clear the mesh, it is measured first.
-    let clear = match kind {
+    // a mesh is made while it is measured (on its own thread, each using
+    // the cores the other leaves idle), and moved onto the output only
+    // once it is measured too. It measures the part's volume, which the
+    // mesh's size check needs: where the part's box alone does not clear
+    // the mesh, and for the other outputs, it is measured first.
+    let beside = match kind {
         Output::Mesh => {
             let n = mesh_resolution(&a, thinnest(&r), b)?;
             let box_volume: f64 = b.size().iter().product();
             check_mesh_size(r.area_per_volume * box_volume, b, n).is_ok()
         }
-        _ => true,
+        _ => false,
     };
     let conn_progress = |_: &str, _: u64, _: u64| {};
-    let written = if clear {
+    let context = || format!("fill {}", a.part.model);
+    let written = if beside {
         let mut conn = r.clone();
         let base = r.notes.len();
-        let (written, measured) = rayon::join(
-            || write(&mut r),
-            || f.add_connectivity(&mut conn, &MeasureOptions::default(), &conn_progress),
-        );
-        let written = written?;
-        measured.with_context(|| format!("fill {}", a.part.model))?;
+        let written = std::thread::scope(|sc| -> Result<serde_json::Value> {
+            let measuring = sc.spawn(|| {
+                f.add_connectivity(&mut conn, &MeasureOptions::default(), &conn_progress)
+            });
+            let measuring = std::sync::Mutex::new(Some(measuring));
+            let gate = || -> Result<()> {
+                let h = measuring.lock().expect("not poisoned").take();
+                if let Some(h) = h {
+                    h.join()
+                        .map_err(|_| anyhow::anyhow!("measuring the connectivity failed"))?
+                        .with_context(context)?;
+                }
+                Ok(())
+            };
+            let w = write(&mut r, &gate)?;
+            gate()?;
+            Ok(w)
+        })?;
         r.connectivity = conn.connectivity;
         r.sealed = conn.sealed;
         r.seconds = conn.seconds;
@@ -390,8 +406,8 @@ pub fn run(a: FillArgs) -> Result<()> {
         written
     } else {
         f.add_connectivity(&mut r, &MeasureOptions::default(), &conn_progress)
-            .with_context(|| format!("fill {}", a.part.model))?;
-        write(&mut r)?
+            .with_context(context)?;
+        write(&mut r, &|| Ok(()))?
     };
     if a.run.json {
         println!("{}", report_json(&a, &f, &r, written));
@@ -519,6 +535,7 @@ fn mesh_checked(
     f: &Filled,
     b: Bounds,
     n: usize,
+    gate: &dyn Fn() -> Result<()>,
 ) -> Result<(microfrep::mesh::job::Summary, usize)> {
     let name = a
         .output
@@ -550,6 +567,7 @@ fn mesh_checked(
              surfaces; nothing written (raise --resolution)"
         );
     }
+    gate()?;
     std::fs::rename(&staged, &a.output)
         .with_context(|| format!("moving the mesh onto {}", a.output.display()))?;
     drop(stage);
