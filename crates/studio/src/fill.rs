@@ -214,7 +214,7 @@ pub(crate) fn run(
         "source": source,
         "file": format!("{stem}-filled.hf"),
         "fields": fields,
-        "report": r.to_json(&f),
+        "report": r.to_json_with(&f, &json_key),
     }))
 }
 

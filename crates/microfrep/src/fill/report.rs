@@ -853,6 +853,12 @@ impl FillReport {
     /// (and `analyze --json` where they overlap: `volume_fraction`); what
     /// an output wrote is the caller's to add.
     pub fn to_json(&self, f: &Filled) -> serde_json::Value {
+        self.to_json_with(f, &super::cli_option)
+    }
+
+    /// [`FillReport::to_json`] with the notes' option names spelled by
+    /// `name`, as a front end spells them (see [`super::with_option_names`]).
+    pub fn to_json_with(&self, f: &Filled, name: &dyn Fn(&str) -> String) -> serde_json::Value {
         use serde_json::json;
         let thickness = |t: &Option<ThicknessFigure>| {
             t.as_ref().map(|t| {
@@ -889,7 +895,7 @@ impl FillReport {
                 "seconds": self.seconds,
             },
             "notes": f.notes.iter().chain(&self.notes)
-                .map(|n| super::with_option_names(n, &super::cli_option))
+                .map(|n| super::with_option_names(n, name))
                 .collect::<Vec<_>>(),
         })
     }
