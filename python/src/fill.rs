@@ -32,6 +32,7 @@ fn python_option(name: &str) -> String {
         "density-expr" => "density= (an expression text)".into(),
         "sheet" => "solid='sheet'".into(),
         "material-layer" => "material_layers=".into(),
+        "volume-per-pore" => "volume_per_pore=".into(),
         n => format!("{}=", n.replace('-', "_")),
     }
 }
@@ -91,7 +92,7 @@ fn density_of(
 #[pyfunction]
 #[pyo3(signature = (part, structure, cell, sheet=false, density=None, density_field=None,
     density_text=None, grade=None, skin=None, seed=1, bounds=None, irregularity=None,
-    parent_scale=None, subdivision=None, opening=None, material_layers=None))]
+    parent_scale=None, subdivision=None, opening=None, material_layers=None, pore_t=None))]
 #[allow(clippy::too_many_arguments)]
 fn fill_part(
     py: Python<'_>,
@@ -111,7 +112,18 @@ fn fill_part(
     subdivision: Option<String>,
     opening: Option<f64>,
     material_layers: Option<Vec<(f64, f64)>>,
+    pore_t: Option<Vec<f64>>,
 ) -> PyResult<PyFilled> {
+    let hand_t = match pore_t {
+        None => None,
+        Some(t) if t.len() == 24 => Some(std::array::from_fn(|s| std::array::from_fn(|k| t[3 * s + k]))),
+        Some(t) => {
+            return Err(errors::input(format!(
+                "fill: pore_t takes 24 numbers (t of the 8 derived points on x, y, z), got {}",
+                t.len()
+            )))
+        }
+    };
     let tmesh = match subdivision.as_deref() {
         None | Some("octree") => false,
         Some("tmesh") => true,
@@ -144,6 +156,7 @@ fn fill_part(
             parent_scale,
             tmesh,
             opening,
+            hand_t,
         },
         material_layers: material_layers
             .unwrap_or_default()

@@ -254,6 +254,20 @@ def test_pore_controls_are_the_clis(tmp_path, sphere_hf):
         mf.fill(part, "gyroid", 2.0, 0.3, irregularity=0.2)
     with pytest.raises(mf.InputError, match="subdivision"):
         mf.pores(part, 2.0, 0.4, subdivision="quadtree")
+    # The paper's size per pore and hand-set t, as the CLI takes them.
+    t = np.full((8, 3), 0.4)
+    t[2, 1] = 0.3
+    py = mf.pores(part, volume_per_pore=8.0, density=0.4, pore_t=t)
+    out = tmp_path / "hand.hf"
+    cli(
+        "fill", sphere_hf, "--structure", "irregular", "--volume-per-pore", 8.0, "--density", 0.4,
+        "--pore-t", ",".join(str(v) for v in t.ravel()), "-o", out, "--json",
+    )
+    assert py.hyperfun() == out.read_text()
+    with pytest.raises(mf.InputError, match="pore_t"):
+        mf.pores(part, 2.0, 0.4, pore_t=[0.4] * 5)
+    with pytest.raises(mf.InputError, match="cell= or volume_per_pore="):
+        mf.pores(part, 2.0, 0.4, volume_per_pore=8.0)
 
 
 def test_fill_errors_are_the_packages(sphere_hf):

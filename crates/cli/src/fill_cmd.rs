@@ -25,8 +25,12 @@ pub struct FillArgs {
     #[arg(long)]
     structure: String,
     /// Cell size (millimetres).
-    #[arg(long)]
-    cell: f64,
+    #[arg(long, required_unless_present = "volume_per_pore")]
+    cell: Option<f64>,
+    /// Irregular pores: the size as the paper's volume per pore (m/P, mm^3)
+    /// instead of --cell: cells of edge its cube root.
+    #[arg(long, conflicts_with = "cell", value_name = "MM3")]
+    volume_per_pore: Option<f64>,
     /// Infill density (volume fraction, 0..1).
     #[arg(long, conflicts_with_all = ["density_grade", "density_expr"])]
     density: Option<f64>,
@@ -66,6 +70,12 @@ pub struct FillArgs {
     /// closed pores below 0.6274).
     #[arg(long)]
     opening: Option<f64>,
+    /// Irregular pores: Eq. 9's t of the derived points set by hand, 24
+    /// numbers in [0, 1] (vertex by vertex, x y z each), the same shape in
+    /// every cell, scaled to each cell's porosity (instead of drawn with
+    /// --irregularity).
+    #[arg(long, value_name = "T1,...,T24")]
+    pore_t: Option<String>,
     /// Park's material subspace DEPTH,RAMP below the part's surface
     /// (repeatable): layer k is material k, its fraction rising from 0 at
     /// DEPTH mm to 1 at DEPTH + RAMP mm (later layers over earlier ones),
@@ -218,7 +228,19 @@ pub fn run(a: FillArgs) -> Result<()> {
     };
     let opts = FillOptions {
         structure,
-        cell: a.cell,
+        cell: match (a.cell, a.volume_per_pore) {
+            (Some(c), _) => c,
+            (None, Some(v)) => {
+                if structure != Structure::Irregular {
+                    bail!("--volume-per-pore sizes irregular pores; give --cell");
+                }
+                if !(v.is_finite() && v > 0.0) {
+                    bail!("--volume-per-pore {v} must be a positive volume (mm^3)");
+                }
+                v.cbrt()
+            }
+            (None, None) => bail!("give --cell (or --volume-per-pore for irregular pores)"),
+        },
         density: density_of(&a)?,
         skin: a.shell,
         seed: a.seed,
@@ -227,6 +249,22 @@ pub fn run(a: FillArgs) -> Result<()> {
             parent_scale: a.parent_scale,
             tmesh: a.subdivision.as_deref() == Some("tmesh"),
             opening: a.opening,
+            hand_t: match &a.pore_t {
+                None => None,
+                Some(t) => {
+                    let v = crate::common::parse_numbers("--pore-t", t)?;
+                    if v.len() != 24 {
+                        bail!(
+                            "--pore-t takes 24 numbers (t of the 8 derived points on x, y, z), \
+                             got {}",
+                            v.len()
+                        );
+                    }
+                    Some(std::array::from_fn(|s| {
+                        std::array::from_fn(|k| v[3 * s + k])
+                    }))
+                }
+            },
         },
         material_layers: a
             .material_layer
@@ -307,12 +345,12 @@ pub fn run(a: FillArgs) -> Result<()> {
                 let Structure::Struts(k) = structure else {
                     unreachable!("beam lattices are struts")
                 };
-                let n = mesh_resolution(&a, thinnest_beam(&r, a.cell), b)?;
+                let n = mesh_resolution(&a, thinnest_beam(&r, f.options.cell), b)?;
                 let (beams, nodes) = microfrep::export::beam_lattice_fill_3mf(
                     &f.core,
                     f.skin.as_ref(),
                     k,
-                    a.cell,
+                    f.options.cell,
                     rad,
                     b,
                     n,

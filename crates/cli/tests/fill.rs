@@ -303,3 +303,62 @@ fn material_layers_reach_a_3mf_palette_and_are_refused_elsewhere() {
         assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
     }
 }
+
+/// Irregular pores sized by the paper's volume per pore are those of the
+/// cell of its cube root, and hand-set t reach the written model.
+#[test]
+fn volume_per_pore_and_hand_set_t_reach_the_fill() {
+    let d = dir("per-pore");
+    let part = ball(&d);
+    let run = |args: &[&str], out: &std::path::Path| {
+        let o = Command::new(bin())
+            .args([
+                "fill",
+                &part,
+                "--structure",
+                "irregular",
+                "--density",
+                "0.4",
+            ])
+            .args(args)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        std::fs::read_to_string(out).unwrap()
+    };
+    let by_cell = run(&["--cell", "4"], &d.join("a.hf"));
+    let by_volume = run(&["--volume-per-pore", "64"], &d.join("b.hf"));
+    assert_eq!(by_cell, by_volume);
+    let t = vec!["0.4"; 24].join(",");
+    let hand = run(&["--cell", "4", "--pore-t", &t], &d.join("c.hf"));
+    assert!(
+        hand.contains("mfPoreFieldOpt(") && hand.contains("t set by hand"),
+        "{hand}"
+    );
+    for (args, says) in [
+        (vec!["--cell", "4", "--pore-t", "0.4,0.4"], "24 numbers"),
+        (vec!["--volume-per-pore=-1"], "positive volume"),
+    ] {
+        let o = Command::new(bin())
+            .args([
+                "fill",
+                &part,
+                "--structure",
+                "irregular",
+                "--density",
+                "0.4",
+            ])
+            .args(&args)
+            .args(["-o", d.join("x.hf").to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
+    }
+}

@@ -467,6 +467,12 @@ fn pore_controls_shape_the_fills_irregular_pores() {
         parent_scale: Some(1.8),
         ..Default::default()
     });
+    let t: [[f64; 3]; 8] =
+        std::array::from_fn(|s| std::array::from_fn(|k| 0.35 + 0.04 * ((s + 2 * k) % 4) as f64));
+    let hand = build(PoreControls {
+        hand_t: Some(t),
+        ..Default::default()
+    });
     let pts = random_points(base.bounds, 2000, 3);
     let differ = |a: &microfrep::fill::Filled, b: &microfrep::fill::Filled| {
         let (mut ea, mut eb) = (a.model.point(), b.model.point());
@@ -479,7 +485,8 @@ fn pore_controls_shape_the_fills_irregular_pores() {
         "irregularity 0 changed nothing"
     );
     assert!(differ(&base, &tmesh) > 20, "the T-mesh changed nothing");
-    for f in [&regular, &tmesh] {
+    assert!(differ(&base, &hand) > 20, "the hand-set t changed nothing");
+    for f in [&regular, &tmesh, &hand] {
         let (mc, se) = monte_carlo_density(f, 200_000, 9);
         assert!((mc - 0.4).abs() < 0.01 + 3.0 * se, "density {mc} ± {se}");
         let text = f.hyperfun().unwrap();

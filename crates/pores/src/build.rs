@@ -113,6 +113,24 @@ pub enum SizeMeasure {
     PerPore,
 }
 
+/// Derived points set by hand (the paper's hand-set distances and `t`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HandSet {
+    /// 2D: the fractions `l_i / side_i` of the first three derived points
+    /// along the parent's sides (counter-clockwise from its lower-left
+    /// corner), each in (0, 1); Eq. 8 gives the fourth from the cell's
+    /// porosity (a cell whose porosity has no fourth in [0, 1] is an
+    /// error).
+    Distances([f64; 3]),
+    /// 3D: Eq. 9's parameters `t[s][k]` of the derived points (vertex `s`
+    /// as in [`crate::pore3`], axis `k`), each in [0, 1]. They fix the
+    /// pore's shape (the derived polyhedron up to scale); its scale is then
+    /// solved for the cell's porosity, so the built `t` are these moved
+    /// together (reported in [`PoreShape::Three`]). A cell where that
+    /// shape cannot meet its porosity within the rules is an error.
+    T([[f64; 3]; 8]),
+}
+
 /// Build options.
 #[derive(Clone)]
 pub struct Options {
@@ -163,6 +181,10 @@ pub struct Options {
     /// What the size argument measures: the cell edge (default) or the
     /// cell area / volume per pore.
     pub size_measure: SizeMeasure,
+    /// The derived points set by hand, the same for every pore, instead of
+    /// drawn at random (`irregularity` is then not used); `None` draws
+    /// them.
+    pub hand_set: Option<HandSet>,
     /// Most cells the subdivision may make.
     pub max_cells: usize,
     /// Most bytes the field may hold (the 3D pores' tables take about
@@ -182,6 +204,7 @@ impl Default for Options {
             weight: 1.0,
             opening: pore3::OPENING,
             size_measure: SizeMeasure::Edge,
+            hand_set: None,
             max_cells: 1 << 21,
             memory_limit: 4 << 30,
         }
@@ -199,6 +222,7 @@ impl std::fmt::Debug for Options {
             .field("weight", &self.weight)
             .field("opening", &self.opening)
             .field("size_measure", &self.size_measure)
+            .field("hand_set", &self.hand_set)
             .field("max_cells", &self.max_cells)
             .field("memory_limit", &self.memory_limit)
             .finish()
@@ -377,6 +401,34 @@ fn check_options(o: &Options) -> Result<(), PoreError> {
         });
     }
     check_weight(o)?;
+    match (o.hand_set, o.dim) {
+        (None, _) => {}
+        (Some(HandSet::Distances(r)), Dim::Two) => {
+            if let Some(&v) = r.iter().find(|v| !(**v > 0.0 && **v < 1.0)) {
+                return Err(PoreError::Option {
+                    name: "distances",
+                    value: v,
+                    why: "hand-set distances are fractions of the sides in (0, 1)",
+                });
+            }
+        }
+        (Some(HandSet::T(t)), Dim::Three) => {
+            if let Some(&v) = t.iter().flatten().find(|v| !(0.0..=1.0).contains(*v)) {
+                return Err(PoreError::Option {
+                    name: "t",
+                    value: v,
+                    why: "hand-set t are Eq. 9 parameters in [0, 1]",
+                });
+            }
+        }
+        (Some(HandSet::Distances(_)), Dim::Three) | (Some(HandSet::T(_)), Dim::Two) => {
+            return Err(PoreError::Option {
+                name: "hand_set",
+                value: f64::NAN,
+                why: "2D pores take three hand-set distances, 3D pores 24 t values",
+            });
+        }
+    }
     if !(0.0..=0.25).contains(&o.opening) {
         return Err(PoreError::Option {
             name: "opening",
@@ -587,11 +639,11 @@ impl Pores {
                     .zip(&targets)
                     .enumerate()
                     .map(|(i, (c, &target))| {
-                        let out = solve_2d(c, target, kappa, options.weight, sigma, seed, i);
+                        let out = solve_2d(c, target, kappa, options, sigma, seed, i);
                         tick();
                         out
                     })
-                    .collect();
+                    .collect::<Result<_, _>>()?;
                 let pores = solved
                     .iter()
                     .map(|p| match &p.shape {
@@ -608,7 +660,7 @@ impl Pores {
                     .zip(&targets)
                     .enumerate()
                     .map(|(i, (c, &target))| {
-                        let out = solve_3d(c, target, kappa, sigma, options.opening, seed, i);
+                        let out = solve_3d(c, target, kappa, sigma, options, seed, i);
                         tick();
                         out
                     })
@@ -774,30 +826,34 @@ fn solve_2d(
     c: &Cell,
     target: f64,
     kappa: f64,
-    weight: f64,
+    options: &Options,
     sigma: f64,
     seed: u64,
     i: usize,
-) -> PoreCell {
+) -> Result<PoreCell, PoreError> {
     if target == 0.0 {
-        return PoreCell {
+        return Ok(PoreCell {
             cell: *c,
             target,
             porosity: 0.0,
             shape: PoreShape::None,
-        };
+        });
     }
-    let mut rng = Rng::for_cell(seed, i as u64);
-    let s = pore2::solve(
-        [c.lo[0], c.lo[1]],
-        [c.hi[0], c.hi[1]],
-        kappa,
-        weight,
-        target,
-        sigma,
-        &mut rng,
-    );
-    PoreCell {
+    let (lo, hi) = ([c.lo[0], c.lo[1]], [c.hi[0], c.hi[1]]);
+    let s = match options.hand_set {
+        Some(HandSet::Distances(r)) => pore2::solve_given(lo, hi, kappa, options.weight, target, r)
+            .ok_or(PoreError::Pore {
+                cell: i,
+                at: c.center(),
+                why: "the hand-set distances leave no fourth distance in [0, 1] for this \
+                      porosity (Eq. 8)",
+            })?,
+        _ => {
+            let mut rng = Rng::for_cell(seed, i as u64);
+            pore2::solve(lo, hi, kappa, options.weight, target, sigma, &mut rng)
+        }
+    };
+    Ok(PoreCell {
         cell: *c,
         target,
         porosity: s.porosity,
@@ -807,7 +863,7 @@ fn solve_2d(
             arcs: s.arcs,
             eq8: s.eq8,
         },
-    }
+    })
 }
 
 type Solved3 = (PoreCell, Option<(Arc<CubeMap>, f64)>, bool);
@@ -823,10 +879,11 @@ fn solve_3d(
     target: f64,
     kappa: f64,
     sigma: f64,
-    opening: f64,
+    options: &Options,
     seed: u64,
     i: usize,
 ) -> Result<Solved3, PoreError> {
+    let opening = options.opening;
     if target == 0.0 {
         return Ok((
             PoreCell {
@@ -839,13 +896,34 @@ fn solve_3d(
             false,
         ));
     }
-    let mut rng = Rng::for_cell(seed, i as u64);
-    let u = pore3::face_balanced(|| rng.signed());
-    let s = pore3::solve(target, &u, sigma, kappa, opening).ok_or(PoreError::Pore {
-        cell: i,
-        at: c.center(),
-        why: "no irregularity down to 0 meets the porosity within the rules",
-    })?;
+    let s = match options.hand_set {
+        Some(HandSet::T(t)) => {
+            // The shape of t: the vertices' relative positions (Eq. 9 puts
+            // vertex s on axis k at kappa (1 - t/2) of the half cell), as
+            // offsets from their mean taken whole (irregularity 1).
+            let b = t.map(|r| r.map(|x| 1.0 - 0.5 * x));
+            let mean = b.iter().flatten().sum::<f64>() / 24.0;
+            let u = b.map(|r| r.map(|x| x / mean - 1.0));
+            pore3::solve(target, &u, 1.0, kappa, opening)
+                .filter(|s| s.sigma == 1.0)
+                .ok_or(PoreError::Pore {
+                    cell: i,
+                    at: c.center(),
+                    why: "the hand-set t give a shape that cannot meet this porosity within \
+                          the rules (the pore would reach past the cell's edges or close \
+                          where it must open)",
+                })?
+        }
+        _ => {
+            let mut rng = Rng::for_cell(seed, i as u64);
+            let u = pore3::face_balanced(|| rng.signed());
+            pore3::solve(target, &u, sigma, kappa, opening).ok_or(PoreError::Pore {
+                cell: i,
+                at: c.center(),
+                why: "no irregularity down to 0 meets the porosity within the rules",
+            })?
+        }
+    };
     let vertices = pore3::derived_polyhedron(c.center(), c.half(), kappa, &s.t);
     Ok((
         PoreCell {

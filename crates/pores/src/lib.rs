@@ -72,8 +72,8 @@ pub mod svg;
 pub mod tree;
 
 pub use build::{
-    part_bounds, porosity_extremes_3d, porosity_range, Built, Dim, Options, PoreCell, PoreShape,
-    Pores, PorositySpec, SizeMeasure, SizeSpec, Spec, SplitRule,
+    part_bounds, porosity_extremes_3d, porosity_range, Built, Dim, HandSet, Options, PoreCell,
+    PoreShape, Pores, PorositySpec, SizeMeasure, SizeSpec, Spec, SplitRule,
 };
 pub use error::PoreError;
 pub use field::PoreField;

@@ -210,6 +210,53 @@ pub(crate) fn solve(
     finish(&g, b, q == q_open)
 }
 
+/// The pore of the cell `lo..hi` for porosity `target` with the first
+/// three fractions `r3` set by hand: the fourth from Eq. 8 (or, where the
+/// pore reaches past the cell, from the clipped area), `None` when no
+/// fourth in [0, 1] meets the porosity.
+pub(crate) fn solve_given(
+    lo: P2,
+    hi: P2,
+    kappa: f64,
+    w: f64,
+    target: f64,
+    r3: [f64; 3],
+) -> Option<Solved2> {
+    let g = Geometry::new(lo, hi, kappa, w);
+    let q_open = target * g.area / (g.alpha * g.parent_area);
+    let mut r = [r3[0], r3[1], r3[2], 0.0];
+    let r4 = solve_r4(r3[0], r3[1], r3[2], q_open);
+    if r4.is_finite() && (0.0..=1.0).contains(&r4) {
+        r[3] = r4;
+        let p = g.porosity(r);
+        if (p - target).abs() <= 1e-12 * target.max(1e-3) && (p - g.unclipped(r)).abs() <= 1e-12 {
+            return Some(finish(&g, r, true));
+        }
+    }
+    // Clipped by the cell: the fourth fraction by bisection on the clipped
+    // area over [0, 1], where the porosity changes sign against the target.
+    let f = |x: f64| {
+        let mut s = r;
+        s[3] = x;
+        g.porosity(s) - target
+    };
+    let fa0 = f(0.0);
+    if fa0 * f(1.0) > 0.0 {
+        return None;
+    }
+    let (mut a, mut b) = (0.0, 1.0);
+    for _ in 0..80 {
+        let m = 0.5 * (a + b);
+        if (f(m) <= 0.0) == (fa0 <= 0.0) {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    r[3] = 0.5 * (a + b);
+    ((g.porosity(r) - target).abs() <= 1e-9).then(|| finish(&g, r, false))
+}
+
 fn finish(g: &Geometry, r: [f64; 4], eq8: bool) -> Solved2 {
     let (ctrl, arcs) = g.pore(r);
     Solved2 {

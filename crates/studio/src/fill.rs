@@ -154,6 +154,19 @@ pub(crate) fn parse(v: &Value) -> Result<Request, StudioError> {
                     }
                 },
                 opening: number(v, "opening")?,
+                hand_t: match v.get("pore_t") {
+                    None | Some(Value::Null) => None,
+                    Some(Value::Array(t))
+                        if t.len() == 24
+                            && t.iter().all(|x| x.as_f64().is_some_and(f64::is_finite)) =>
+                    {
+                        let t: Vec<f64> = t.iter().filter_map(Value::as_f64).collect();
+                        Some(std::array::from_fn(|s| {
+                            std::array::from_fn(|k| t[3 * s + k])
+                        }))
+                    }
+                    Some(_) => return Err(bad("'pore_t' takes 24 numbers in [0, 1]")),
+                },
             },
             // Attribute channels, which the HyperFun answer cannot carry.
             material_layers: Vec::new(),

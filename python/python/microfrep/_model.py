@@ -1219,22 +1219,35 @@ diamond = _struts_named("diamond")
 @_recorded
 def pores(
     part: Shape,
-    cell: float,
-    density: Field,
+    cell: Optional[float] = None,
+    density: Field = None,
     seed: int = 1,
     bounds: Optional[Box] = None,
     irregularity: Optional[float] = None,
     parent_scale: Optional[float] = None,
     subdivision: Optional[str] = None,
     opening: Optional[float] = None,
+    pore_t=None,
+    volume_per_pore: Optional[float] = None,
 ) -> "FilledModel":
     """Irregular pores (Kou and Tan) in ``part``: cells of edge ``cell``,
     each with a pore made so that the part keeps relative density
     ``density`` (a number, or an expression for graded pores); ``seed``
     fixes the randomness. ``bounds`` default to the part's. The paper's
     controls, as :func:`fill` takes them: ``irregularity``,
-    ``parent_scale``, ``subdivision`` ('octree' or 'tmesh'), ``opening``.
+    ``parent_scale``, ``subdivision`` ('octree' or 'tmesh'), ``opening``,
+    ``pore_t``; ``volume_per_pore`` (the paper's m/P, mm^3) sizes the
+    cells instead of ``cell`` (cells of edge its cube root).
     The same as ``fill(part, "irregular", cell, density, seed=seed, ...)``."""
+    if (cell is None) == (volume_per_pore is None):
+        raise _core.InputError("pores: give cell= or volume_per_pore=, one of them")
+    if volume_per_pore is not None:
+        v = float(volume_per_pore)
+        if not (np.isfinite(v) and v > 0):
+            raise _core.InputError(f"pores: volume_per_pore {volume_per_pore!r} must be a positive volume (mm^3)")
+        cell = float(np.cbrt(v))  # as the CLI computes it (libm cbrt)
+    if density is None:
+        raise _core.InputError("pores: give a density (the part's solid fraction)")
     return fill(
         part,
         "irregular",
@@ -1246,6 +1259,7 @@ def pores(
         parent_scale=parent_scale,
         subdivision=subdivision,
         opening=opening,
+        pore_t=pore_t,
     )
 
 
@@ -1387,6 +1401,7 @@ def fill(
     subdivision: Optional[str] = None,
     opening: Optional[float] = None,
     material_layers: Optional[Sequence[Tuple[float, float]]] = None,
+    pore_t=None,
 ) -> FilledModel:
     """``part`` filled with a microstructure, as ``microfrep fill`` builds
     it (the one fill of the library: the same model and the same values).
@@ -1409,8 +1424,10 @@ def fill(
     parent polyhedron over the cell, 4/3 to 2, default 1.6) and
     ``subdivision`` ('octree', the default, or 'tmesh') and ``opening``
     (0 to 0.25, default 0.05: how far pores below 0.6274 porosity reach
-    past their cell's faces, so that they open into their neighbours).
-    ``material_layers``: Park's material subspaces below the surface, a
+    past their cell's faces, so that they open into their neighbours),
+    ``pore_t`` (Eq. 9's t of the 8 derived points, 24 numbers or 8 x 3,
+    in [0, 1]: the pores' shape set by hand, scaled to each cell's
+    porosity). ``material_layers``: Park's material subspaces below the surface, a
     list of ``(depth, ramp)`` in millimetres; layer k is material k, its
     fraction rising from 0 at ``depth`` to 1 at ``depth + ramp`` (later
     layers over earlier ones), material 0 the rest; they are the model's
@@ -1469,6 +1486,7 @@ def fill(
         subdivision=subdivision,
         opening=None if opening is None else float(opening),
         material_layers=None if material_layers is None else [(float(d), float(r)) for d, r in material_layers],
+        pore_t=None if pore_t is None else [float(v) for v in np.asarray(pore_t, dtype=float).ravel()],
         **kw,
     )
     return FilledModel(f)

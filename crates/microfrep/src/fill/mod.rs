@@ -207,6 +207,11 @@ pub struct PoreControls {
     /// cell, in [0, 0.25] (0.05: pores open into their neighbours from
     /// 0.4559 porosity; 0 gives the plain construction).
     pub opening: Option<f64>,
+    /// Eq. 9's parameters `t[s][k]` of every pore's derived points, set by
+    /// hand (each in [0, 1]): they fix the pores' shape, whose scale then
+    /// meets each cell's porosity; `None` draws them (with
+    /// `irregularity`).
+    pub hand_t: Option<[[f64; 3]; 8]>,
 }
 
 impl PoreControls {
@@ -230,22 +235,27 @@ impl PoreControls {
         if let Some(v) = self.opening {
             o.opening = v;
         }
+        o.hand_set = self.hand_t.map(microfrep_pores::HandSet::T);
         o
     }
 
     /// The options array of HyperFun's `mfPoreFieldOpt` (as `mfPoresOpt`
     /// takes it): `[irregularity, parent_scale, subdivision, weight,
-    /// size_measure, opening]`.
+    /// size_measure, opening]`, then the 24 hand-set `t` if set.
     pub fn hyperfun_array(&self) -> Vec<f64> {
         let o = self.options();
-        vec![
+        let mut v = vec![
             o.irregularity,
             o.parent_scale.unwrap_or(microfrep_pores::pore3::KAPPA),
             if self.tmesh { 1.0 } else { 0.0 },
             1.0,
             0.0,
             o.opening,
-        ]
+        ];
+        if let Some(t) = self.hand_t {
+            v.extend(t.iter().flatten());
+        }
+        v
     }
 }
 
@@ -446,9 +456,13 @@ pub fn fill(part: &Part, opts: &FillOptions, progress: Progress) -> Result<Fille
                 &|d, n| progress("making the pores", d, n),
             )
             .map_err(|e| match e {
-                microfrep_pores::PoreError::Option { name, value, why } => {
-                    bad(format!("⟨{}⟩ {value}: {why}", name.replace('_', "-")))
-                }
+                microfrep_pores::PoreError::Option { name, value, why } => bad(format!(
+                    "⟨{}⟩ {value}: {why}",
+                    match name {
+                        "t" => "pore-t".to_string(),
+                        n => n.replace('_', "-"),
+                    }
+                )),
                 e => FillError::Build(format!("irregular pores: {e}")),
             })?;
             design.pores = Some((built.pores, built.dropped));
@@ -606,8 +620,8 @@ fn check_options(part: &Part, opts: &FillOptions) -> Result<(), FillError> {
     }
     if !opts.pores.is_default() && opts.structure != Structure::Irregular {
         return Err(bad(format!(
-            "⟨irregularity⟩, ⟨parent-scale⟩, ⟨subdivision⟩ and ⟨opening⟩ shape irregular \
-             pores; the structure is {}",
+            "⟨irregularity⟩, ⟨parent-scale⟩, ⟨subdivision⟩, ⟨opening⟩ and ⟨pore-t⟩ shape \
+             irregular pores; the structure is {}",
             opts.structure.name()
         )));
     }
@@ -905,11 +919,16 @@ impl Filled {
             let a = o.pores.hyperfun_array();
             head.push_str(&format!(
                 "-- Kou-Tan controls: irregularity {}, parent scale {}, {} subdivision, \
-                 opening {}.\n",
+                 opening {}{}.\n",
                 a[0],
                 a[1],
                 if o.pores.tmesh { "T-mesh" } else { "octree" },
-                a[5]
+                a[5],
+                if o.pores.hand_t.is_some() {
+                    ", t set by hand"
+                } else {
+                    ""
+                }
             ));
         }
         head.push_str(&format!(

@@ -11,7 +11,7 @@
 use crate::args::three;
 use microfrep_core::Expr;
 use microfrep_hyperfun::library::{Arg, Kind::*, Output, Registry};
-use microfrep_pores::{part_bounds, Dim, Options, Pores, SizeMeasure, Spec, Subdivision};
+use microfrep_pores::{part_bounds, Dim, HandSet, Options, Pores, SizeMeasure, Spec, Subdivision};
 
 /// The seed argument: a constant integer in [0, 2^53).
 fn seed(a: &Arg) -> Result<u64, Output> {
@@ -65,20 +65,43 @@ const OPT_NAMES: [&str; 6] = [
 ///   paper's cell area (2D) / volume (3D) per pore, `m/P`.
 /// - `opening` (3D; default 0.05) in [0, 0.25]: reach of opened pores past
 ///   the face centres (0: the plain Doo-Sabin pores, closed below 0.6274).
+///
+/// After all six, the derived points may be set by hand, the same in every
+/// cell: in 2D three distances (fractions of the sides in (0, 1); Eq. 8
+/// gives the fourth), in 3D the 24 Eq. 9 parameters `t[s][k]` (vertex by
+/// vertex, axis by axis; they fix the shape, and its scale meets the
+/// porosity). `irregularity` is then not used.
 fn opts(a: &Arg, dim: Dim) -> Result<Options, Output> {
     let v = a.array();
-    if v.is_empty() || v.len() > OPT_NAMES.len() {
+    // After the six controls, the hand-set derived points: three
+    // distances in 2D, the 24 t values in 3D.
+    let hand = match dim {
+        Dim::Two => 3,
+        Dim::Three => 24,
+    };
+    if v.is_empty() || (v.len() > OPT_NAMES.len() && v.len() != OPT_NAMES.len() + hand) {
         return Err(Output::error(format!(
             "opts must be an array of 1 to 6 numbers [irregularity, parent_scale, \
-             subdivision, weight, size_measure, opening], not {}",
+             subdivision, weight, size_measure, opening], or those 6 and {hand} hand-set {}, \
+             not {}",
+            if hand == 3 { "distances" } else { "t values" },
             v.len()
         )));
+    }
+    let mut set = Vec::new();
+    for (i, e) in v.iter().enumerate().skip(OPT_NAMES.len()) {
+        set.push(e.as_const().ok_or_else(|| {
+            Output::error(format!(
+                "opts[{}] (a hand-set value) must be a constant known when the model is loaded",
+                i + 1
+            ))
+        })?);
     }
     let mut o = match dim {
         Dim::Two => Options::two_d(),
         Dim::Three => Options::default(),
     };
-    for (i, e) in v.iter().enumerate() {
+    for (i, e) in v.iter().enumerate().take(OPT_NAMES.len()) {
         let name = OPT_NAMES[i];
         let Some(x) = e.as_const() else {
             return Err(Output::error(format!(
@@ -116,6 +139,14 @@ fn opts(a: &Arg, dim: Dim) -> Result<Options, Output> {
             }
             _ => o.opening = x,
         }
+    }
+    if !set.is_empty() {
+        o.hand_set = Some(match dim {
+            Dim::Two => HandSet::Distances([set[0], set[1], set[2]]),
+            Dim::Three => HandSet::T(std::array::from_fn(|v| {
+                std::array::from_fn(|k| set[3 * v + k])
+            })),
+        });
     }
     Ok(o)
 }

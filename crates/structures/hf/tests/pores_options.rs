@@ -215,3 +215,30 @@ fn bad_options_are_load_errors_naming_the_element() {
         "{e}"
     );
 }
+
+/// Hand-set derived points after the six controls: three distances in 2D
+/// keep the porosity (Eq. 8 gives the fourth; pixel count) and make every
+/// pore the same shape (no spread between cells' quarters from the draw);
+/// 24 t values in 3D load; a wrong count is a load error.
+#[test]
+fn hand_set_distances_and_t_from_hyperfun() {
+    let call = "mfPores2Opt(x, b, 0.5, 0.6, 1, o)";
+    let p = plate(call, "0.15, 1, 0, 1, 0, 0.05, 0.2, 0.15, 0.25");
+    let por = pixel_porosity(&p, 800);
+    assert!((por - 0.6).abs() < 0.003, "{por}");
+    let drawn = plate(call, "0.15");
+    assert!(
+        (pixel_porosity(&drawn, 800) - 0.6).abs() < 0.003,
+        "the drawn pores' porosity"
+    );
+    let t = vec!["0.4"; 24].join(", ");
+    let src = format!(
+        "my_model(x[3], a[1]) {{ array v[3]; array o[30]; v = [0, 0, 0]; \
+         o = [0.15, 1.6, 0, 1, 0, 0.05, {t}]; b = hfBlock(x, v, 2, 2, 2); \
+         my_model = mfPoresOpt(x, b, 1, 0.6, 1, o); }}"
+    );
+    let m = load_src(&src, "hand3.hf", None);
+    assert_eq!(pore_count(&m.value), 8);
+    let e = load_error("0.15, 1, 0, 1, 0, 0.05, 0.3, 0.3", call);
+    assert!(e.contains("3 hand-set distances"), "{e}");
+}
