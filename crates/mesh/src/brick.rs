@@ -85,6 +85,9 @@ pub struct Scratch {
     /// packed local cell coordinates).
     grad: Option<GradBatchEval>,
     cells: Vec<(u8, u32, u32)>,
+    /// Whether each of `cells` has corner samples that spread
+    /// ([`spread_at_corners`]).
+    spread: Vec<bool>,
 }
 
 /// How a brick's vertices are finished: the grid's cell size, the volume
@@ -113,6 +116,7 @@ impl Scratch {
         Scratch {
             grad: finish.sharp.then(|| GradBatchEval::new(tape)),
             cells: Vec::new(),
+            spread: Vec::new(),
             count_edges,
             face: Vec::new(),
             tape: tape.clone(),
@@ -174,6 +178,7 @@ pub fn mesh_brick(
     s.tris.clear();
     s.verts.clear();
     s.cells.clear();
+    s.spread.clear();
     let sharp = s.grad.is_some();
     let mut q = vec![0u8; n[0]];
     // Per cell edge (start corner * 8 + direction): its vmap slot and packed
@@ -221,8 +226,9 @@ pub fn mesh_brick(
                 }
                 let range = table.start[mask] as usize..table.start[mask + 1] as usize;
                 let (base, pbase) = ((j * sy + i) * stride, (i | j << 9 | k << 18) as u32);
-                if sharp && spread_at_corners(&s.vals, row + i, sy, sz) {
+                if sharp {
                     s.cells.push((mask as u8, s.tris.len() as u32, pbase));
+                    s.spread.push(spread_at_corners(&s.vals, row + i, sy, sz));
                 }
                 for tri in &table.tris[range] {
                     s.tris.push(tri.map(|e| {
@@ -475,89 +481,8 @@ fn features(
     let cycles = crate::cubes::cycle_table();
     let h = grid.h;
     let np = s.pos.len();
-    // The local vertices of the candidate cells (`at[i]`: the place of
-    // local vertex `i` among them), their edges and their samples.
-    let mut at = vec![u32::MAX; np];
-    let mut which: Vec<usize> = Vec::new();
-    for &(mask, base, _) in &s.cells {
-        let m = mask as usize;
-        let count = (table.start[m + 1] - table.start[m]) as usize;
-        for t in &s.tris[base as usize..base as usize + count] {
-            for &v in t {
-                let i = s.remap[v as usize] as usize;
-                if at[i] == u32::MAX {
-                    at[i] = which.len() as u32;
-                    which.push(i);
-                }
-            }
-        }
-    }
-    let mut edge_of = vec![(0usize, [0.0f64; 2]); which.len()];
-    for (vi, &packed) in s.verts.iter().enumerate() {
-        let w = at[s.remap[vi] as usize];
-        if w == u32::MAX {
-            continue;
-        }
-        let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
-        let axis = ((packed >> 27) as usize).trailing_zeros() as usize;
-        let a = grid.node_pos(std::array::from_fn(|k| lo[k] + ln[k]));
-        let t = 1e-3 * h;
-        edge_of[w as usize] = (axis, [a[axis] + t, a[axis] + h - t]);
-    }
-    let ev = s.grad.as_mut().expect("sharp features have a gradient");
-    let mut g = vec![[0.0f32; 4]; which.len()];
-    {
-        let col = |k: usize| -> Vec<f32> { which.iter().map(|&i| s.pos[i][k]).collect() };
-        ev.eval(&col(0), &col(1), &col(2), &mut g);
-    }
-    // Regula falsi leaves vertices a few hundredths of a cell off the
-    // surface where their edge crosses a crease (the field has a kink
-    // there); Newton steps along the edge, each kept only where it lowers
-    // |f|, put them on it.
-    let mut todo: Vec<usize> = Vec::new();
-    let mut trial: Vec<[f32; 3]> = Vec::new();
-    for _ in 0..4 {
-        todo.clear();
-        trial.clear();
-        for (w, gi) in g.iter().enumerate() {
-            let i = which[w];
-            let (axis, [lo_t, hi_t]) = edge_of[w];
-            let slope = gi[1 + axis];
-            let len = (gi[1] * gi[1] + gi[2] * gi[2] + gi[3] * gi[3]).sqrt();
-            let off = gi[0].abs() > 1e-4 * h as f32 * len;
-            if !off || slope == 0.0 {
-                continue;
-            }
-            let mut p = s.pos[i];
-            let x = (p[axis] as f64 - gi[0] as f64 / slope as f64).clamp(lo_t, hi_t);
-            p[axis] = x as f32;
-            if p != s.pos[i] {
-                todo.push(w);
-                trial.push(p);
-            }
-        }
-        if todo.is_empty() {
-            break;
-        }
-        let col = |k: usize| -> Vec<f32> { trial.iter().map(|p| p[k]).collect() };
-        let mut gt = vec![[0.0f32; 4]; todo.len()];
-        ev.eval(&col(0), &col(1), &col(2), &mut gt);
-        for ((&w, &p), gn) in todo.iter().zip(&trial).zip(&gt) {
-            if gn[0].abs() < g[w][0].abs() {
-                s.pos[which[w]] = p;
-                g[w] = *gn;
-            }
-        }
-    }
     let mut normals = vec![[0.0f64; 3]; np];
-    for (&i, g) in which.iter().zip(&g) {
-        let n = &mut normals[i];
-        let d = [g[1] as f64, g[2] as f64, g[3] as f64];
-        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if len > 0.0 && len.is_finite() {
-            *n = d.map(|v| -v / len);
-        }
-    }
+    let mut done = vec![false; np];
     let first = s.remap.len() as u32;
     // Candidate fans: the feature vertex, and the cycle's triangles in
     // `s.tris` and fan triangles in `fans` (one per crossing, in order).
@@ -569,49 +494,90 @@ fn features(
     let (mut vs, mut ps, mut ns) = (Vec::new(), Vec::new(), Vec::new());
     let mut pinned = Vec::new();
     let mut planar = Vec::new();
-    for &(mask, base, packed) in &s.cells {
-        let m = mask as usize;
-        let t0 = table.start[m] as usize;
-        let cell = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
-        let corner = grid.node_pos(std::array::from_fn(|a| lo[a] + cell[a]));
-        for cy in &cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize] {
-            let tris = cy.tris.start as usize..cy.tris.end as usize;
-            vs.clear();
-            for &e in &cy.edges {
-                let v = tris.clone().find_map(|t| {
-                    let tri = s.tris[base as usize + t - t0];
-                    table.tris[t].iter().position(|&x| x == e).map(|q| tri[q])
-                });
-                vs.push(v.expect("a cycle's crossings are its triangles' corners"));
+    // Two passes: the cells whose corner samples spread, then the surface
+    // cells beside a cell that found a feature point whose own corners
+    // looked flat (a crease passing near one of their corners mixes the
+    // two sides' differences too little for the corner test, and its
+    // chain of feature vertices would break there).
+    let mut found = vec![false; s.cells.len()];
+    let mut pass: Vec<usize> = (0..s.cells.len()).filter(|&c| s.spread[c]).collect();
+    for round in 0..2 {
+        if round == 1 {
+            let index: HashMap<u32, usize> = s
+                .cells
+                .iter()
+                .enumerate()
+                .map(|(c, &(_, _, packed))| (packed, c))
+                .collect();
+            let mut next = vec![false; s.cells.len()];
+            for (c, &(_, _, packed)) in s.cells.iter().enumerate() {
+                if !found[c] {
+                    continue;
+                }
+                for sh in [0, 9, 18] {
+                    for q in [packed.wrapping_sub(1 << sh), packed + (1 << sh)] {
+                        // Stay on the same row: the other fields unchanged.
+                        let same = [0, 9, 18]
+                            .iter()
+                            .all(|&o| o == sh || (q >> o) & 511 == (packed >> o) & 511);
+                        if let Some(&d) = index.get(&q).filter(|_| same) {
+                            next[d] |= !s.spread[d];
+                        }
+                    }
+                }
             }
-            ps.clear();
-            ns.clear();
-            for &v in &vs {
-                let i = s.remap[v as usize] as usize;
-                let p = s.pos[i];
-                ps.push(std::array::from_fn(|k| (p[k] as f64 - corner[k]) / h));
-                ns.push(normals[i]);
+            pass = (0..s.cells.len()).filter(|&c| next[c]).collect();
+            if pass.is_empty() {
+                break;
             }
-            let Some(feature) = crate::sharp::feature_point(&ps, &ns) else {
-                continue;
-            };
-            if feature.planar {
-                pinned.extend_from_slice(&vs);
-            }
-            let Some(x) = feature.point else {
-                continue;
-            };
-            planar.push(feature.planar);
-            let id = first + feats.len() as u32;
-            let c = feats.len();
-            feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
-            let start = old_tris.len();
-            old_tris.extend(tris.map(|t| base as usize + t - t0));
-            old.push(start..old_tris.len());
-            let n = vs.len();
-            for i in 0..n {
-                fans.push([id, vs[i], vs[(i + 1) % n]]);
-                fan_of.push(c);
+        }
+        crossing_normals(grid, lo, table, s, &pass, &mut done, &mut normals);
+        for &c in &pass {
+            let (mask, base, packed) = s.cells[c];
+            let m = mask as usize;
+            let t0 = table.start[m] as usize;
+            let cell = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
+            let corner = grid.node_pos(std::array::from_fn(|a| lo[a] + cell[a]));
+            for cy in &cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize] {
+                let tris = cy.tris.start as usize..cy.tris.end as usize;
+                vs.clear();
+                for &e in &cy.edges {
+                    let v = tris.clone().find_map(|t| {
+                        let tri = s.tris[base as usize + t - t0];
+                        table.tris[t].iter().position(|&x| x == e).map(|q| tri[q])
+                    });
+                    vs.push(v.expect("a cycle's crossings are its triangles' corners"));
+                }
+                ps.clear();
+                ns.clear();
+                for &v in &vs {
+                    let i = s.remap[v as usize] as usize;
+                    let p = s.pos[i];
+                    ps.push(std::array::from_fn(|k| (p[k] as f64 - corner[k]) / h));
+                    ns.push(normals[i]);
+                }
+                let Some(feature) = crate::sharp::feature_point(&ps, &ns) else {
+                    continue;
+                };
+                if feature.planar {
+                    pinned.extend_from_slice(&vs);
+                }
+                let Some(x) = feature.point else {
+                    continue;
+                };
+                found[c] = true;
+                planar.push(feature.planar);
+                let id = first + feats.len() as u32;
+                let f = feats.len();
+                feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
+                let start = old_tris.len();
+                old_tris.extend(tris.map(|t| base as usize + t - t0));
+                old.push(start..old_tris.len());
+                let n = vs.len();
+                for i in 0..n {
+                    fans.push([id, vs[i], vs[(i + 1) % n]]);
+                    fan_of.push(f);
+                }
             }
         }
     }
@@ -774,6 +740,106 @@ fn features(
         }
     }
     (kept, pinned)
+}
+
+/// Unit outward normals, from the full tape's gradient, at the crossings of
+/// the cells `pass` (indices into `s.cells`) not `done` yet; each crossing
+/// first moved onto the zero set along its edge where regula falsi left it
+/// off (see below).
+fn crossing_normals(
+    grid: &Grid,
+    lo: [usize; 3],
+    table: &CellTable,
+    s: &mut Scratch,
+    pass: &[usize],
+    done: &mut [bool],
+    normals: &mut [[f64; 3]],
+) {
+    let h = grid.h;
+    let np = s.pos.len();
+    // The local vertices of the candidate cells (`at[i]`: the place of
+    // local vertex `i` among them), their edges and their samples.
+    let mut at = vec![u32::MAX; np];
+    let mut which: Vec<usize> = Vec::new();
+    for &(mask, base, _) in pass.iter().map(|&c| &s.cells[c]) {
+        let m = mask as usize;
+        let count = (table.start[m + 1] - table.start[m]) as usize;
+        for t in &s.tris[base as usize..base as usize + count] {
+            for &v in t {
+                let i = s.remap[v as usize] as usize;
+                if at[i] == u32::MAX && !done[i] {
+                    at[i] = which.len() as u32;
+                    which.push(i);
+                }
+            }
+        }
+    }
+    let mut edge_of = vec![(0usize, [0.0f64; 2]); which.len()];
+    for (vi, &packed) in s.verts.iter().enumerate() {
+        let w = at[s.remap[vi] as usize];
+        if w == u32::MAX {
+            continue;
+        }
+        let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
+        let axis = ((packed >> 27) as usize).trailing_zeros() as usize;
+        let a = grid.node_pos(std::array::from_fn(|k| lo[k] + ln[k]));
+        let t = 1e-3 * h;
+        edge_of[w as usize] = (axis, [a[axis] + t, a[axis] + h - t]);
+    }
+    let ev = s.grad.as_mut().expect("sharp features have a gradient");
+    let mut g = vec![[0.0f32; 4]; which.len()];
+    {
+        let col = |k: usize| -> Vec<f32> { which.iter().map(|&i| s.pos[i][k]).collect() };
+        ev.eval(&col(0), &col(1), &col(2), &mut g);
+    }
+    // Regula falsi leaves vertices a few hundredths of a cell off the
+    // surface where their edge crosses a crease (the field has a kink
+    // there); Newton steps along the edge, each kept only where it lowers
+    // |f|, put them on it.
+    let mut todo: Vec<usize> = Vec::new();
+    let mut trial: Vec<[f32; 3]> = Vec::new();
+    for _ in 0..4 {
+        todo.clear();
+        trial.clear();
+        for (w, gi) in g.iter().enumerate() {
+            let i = which[w];
+            let (axis, [lo_t, hi_t]) = edge_of[w];
+            let slope = gi[1 + axis];
+            let len = (gi[1] * gi[1] + gi[2] * gi[2] + gi[3] * gi[3]).sqrt();
+            let off = gi[0].abs() > 1e-4 * h as f32 * len;
+            if !off || slope == 0.0 {
+                continue;
+            }
+            let mut p = s.pos[i];
+            let x = (p[axis] as f64 - gi[0] as f64 / slope as f64).clamp(lo_t, hi_t);
+            p[axis] = x as f32;
+            if p != s.pos[i] {
+                todo.push(w);
+                trial.push(p);
+            }
+        }
+        if todo.is_empty() {
+            break;
+        }
+        let col = |k: usize| -> Vec<f32> { trial.iter().map(|p| p[k]).collect() };
+        let mut gt = vec![[0.0f32; 4]; todo.len()];
+        ev.eval(&col(0), &col(1), &col(2), &mut gt);
+        for ((&w, &p), gn) in todo.iter().zip(&trial).zip(&gt) {
+            if gn[0].abs() < g[w][0].abs() {
+                s.pos[which[w]] = p;
+                g[w] = *gn;
+            }
+        }
+    }
+    for (&i, g) in which.iter().zip(&g) {
+        done[i] = true;
+        let n = &mut normals[i];
+        let d = [g[1] as f64, g[2] as f64, g[3] as f64];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if len > 0.0 && len.is_finite() {
+            *n = d.map(|v| -v / len);
+        }
+    }
 }
 
 fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

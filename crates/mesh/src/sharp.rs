@@ -42,7 +42,7 @@ const TRUNCATE: f64 = 0.02;
 
 /// How far, in cells, a feature vertex may lie outside the cell whose
 /// normals found it.
-const SLACK: f64 = 0.25;
+const SLACK: f64 = 0.5;
 
 /// The root mean square distance, in cells, from the feature vertex to the
 /// tangent planes above which the cycle counts as smooth.
@@ -164,8 +164,9 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
     let x = match kept {
         // A corner: where the planes meet, which must be in the cell.
         3 => x,
-        // A crease: the point of its line nearest the mass point, kept
-        // within the cell (the line misses the cell: no feature here).
+        // A crease: the middle of its chord through the cell, or where
+        // the line misses the cell, its point nearest the cell (which
+        // must be within `SLACK`).
         2 => {
             let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
             for k in 0..3 {
@@ -181,11 +182,14 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
             // The middle of the crease's chord through the cell (a point on
             // a face of the cell would lay the fan triangle of that face's
             // segment into the face); where the line misses the cell, its
-            // point nearest the cell's centre.
+            // point nearest the cell: a crease through a cell whose corners
+            // are all outside is seen only by its neighbours, and each of
+            // them must put its vertex on the crease where it passes them
+            // for the chain of flipped segments to follow it.
             let t = if t0 <= t1 && t0.is_finite() && t1.is_finite() {
                 0.5 * (t0 + t1)
             } else {
-                dot(sub([0.5; 3], x), along)
+                nearest_to_cell(x, along)
             };
             std::array::from_fn(|k| x[k] + t * along[k])
         }
@@ -207,6 +211,33 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
         point: (inside && rms <= RESIDUAL).then_some(x),
         planar: rms <= PLANAR,
     })
+}
+
+/// The parameter `t` of the point `x + t along` of a line (`along` a unit
+/// vector) nearest the unit cell: the distance to the cell is convex in
+/// `t`, so a golden-section search on a bracket around the point nearest
+/// the cell's centre finds it.
+fn nearest_to_cell(x: [f64; 3], along: [f64; 3]) -> f64 {
+    let gap = |t: f64| -> f64 {
+        (0..3)
+            .map(|k| {
+                let v = x[k] + t * along[k];
+                (v.max(0.0) - v).max(v - v.min(1.0)).powi(2)
+            })
+            .sum()
+    };
+    let c = dot(sub([0.5; 3], x), along);
+    let (mut a, mut b) = (c - 2.0, c + 2.0);
+    const R: f64 = 0.618_033_988_749_895;
+    for _ in 0..60 {
+        let (p, q) = (b - R * (b - a), a + R * (b - a));
+        if gap(p) <= gap(q) {
+            b = q;
+        } else {
+            a = p;
+        }
+    }
+    0.5 * (a + b)
 }
 
 /// Whether the fan triangle `f a b` (positions in any common frame, `na`
