@@ -42,6 +42,28 @@ pub struct BrickMesh {
     /// The brick's edges for an edge census, when asked for
     /// ([`Scratch::new`]); the shared uses in the numbering of `tris`.
     pub edges: Option<BrickEdges>,
+    /// Sharp features: fan triangles on segments in the brick's face
+    /// planes, which may flip with a neighbour brick's.
+    pub rims: Vec<Rim>,
+}
+
+/// A fan triangle `f a b` of a sharp feature ([`crate::sharp`]) whose
+/// segment `a b` lies in a face plane of its brick and was not flipped
+/// there: the fan of the neighbour brick's cell across that face has the
+/// triangle `f' b a`, and the pipeline flips the pair as the brick does
+/// within itself.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rim {
+    /// Grid edge keys of `a` and `b`.
+    pub keys: [u64; 2],
+    /// Its index in [`BrickMesh::tris`].
+    pub tri: u32,
+    /// Positions of `f`, `a` and `b`, and the unit normals at `a` and `b`.
+    pub f: [f64; 3],
+    pub a: [f64; 3],
+    pub b: [f64; 3],
+    pub na: [f64; 3],
+    pub nb: [f64; 3],
 }
 
 /// Per-thread buffers, reused from brick to brick.
@@ -353,8 +375,9 @@ pub fn mesh_brick(
     // and numbered after its other owned vertices (the foreign ones move up).
     let mut pinned = Vec::new();
     if sharp {
-        let (feats, pin) = features(grid, lo, table, s);
+        let (feats, pin, rims) = features(grid, lo, n, table, s);
         pinned = pin;
+        out.rims = rims;
         if !feats.is_empty() {
             let nf = feats.len() as u32;
             for r in s.remap.iter_mut() {
@@ -474,9 +497,10 @@ fn spread_at_corners(vals: &[f32], l: usize, sy: usize, sz: usize) -> bool {
 fn features(
     grid: &Grid,
     lo: [usize; 3],
+    n: [usize; 3],
     table: &CellTable,
     s: &mut Scratch,
-) -> (Vec<[f32; 3]>, Vec<u32>) {
+) -> (Vec<[f32; 3]>, Vec<u32>, Vec<Rim>) {
     use std::collections::HashMap;
     let cycles = crate::cubes::cycle_table();
     let h = grid.h;
@@ -582,7 +606,7 @@ fn features(
         }
     }
     if feats.is_empty() {
-        return (feats, pinned);
+        return (feats, pinned, Vec::new());
     }
     // Shared segments: fan triangles `f1 a b` and `f2 b a` of two cells
     // that share no other segment.
@@ -727,6 +751,16 @@ fn features(
         }
     }
     s.tris.retain(|t| t[0] != u32::MAX);
+    // The grid edge of local vertex `v` when it lies in a face plane of the
+    // brick (where a neighbour brick has the same vertex).
+    let face_key = |v: u32| -> Option<u64> {
+        let packed = s.verts[v as usize];
+        let ln = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
+        let dir = (packed >> 27) as usize;
+        let in_face = (0..3).any(|a| (ln[a] == 0 || ln[a] + 1 == n[a]) && dir >> a & 1 == 0);
+        in_face.then(|| grid.node_index(std::array::from_fn(|a| lo[a] + ln[a])) * 8 + dir as u64)
+    };
+    let mut rims = Vec::new();
     for (ti, t) in fans.iter().enumerate() {
         if keep[group[fan_of[ti]]] && !dead[ti] {
             let at = |v: u32| {
@@ -736,10 +770,26 @@ fn features(
                     v
                 }
             };
+            // Not flipped here, on a segment in a face plane: a fan of the
+            // neighbour brick may flip with it (`pipeline`).
+            if t[2] < first {
+                if let (Some(ka), Some(kb)) = (face_key(t[1]), face_key(t[2])) {
+                    let p = |v: u32| s.pos[s.remap[v as usize] as usize].map(|c| c as f64);
+                    rims.push(Rim {
+                        keys: [ka, kb],
+                        tri: s.tris.len() as u32,
+                        f: feats[group[fan_of[ti]]].map(|c| c as f64),
+                        a: p(t[1]),
+                        b: p(t[2]),
+                        na: normal(t[1]),
+                        nb: normal(t[2]),
+                    });
+                }
+            }
             s.tris.push(t.map(at));
         }
     }
-    (kept, pinned)
+    (kept, pinned, rims)
 }
 
 /// Unit outward normals, from the full tape's gradient, at the crossings of

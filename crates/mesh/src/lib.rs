@@ -130,13 +130,16 @@ pub struct MeshOptions {
     /// ([`sharp`]; default off): a cell whose vertex normals spread by more
     /// than 35 degrees gets a vertex where their tangent planes meet, with
     /// its cycle fanned around it; crease segments between two such cells
-    /// of one brick are flipped onto the crease (or the two vertices merged
-    /// where they found the same stretch of crease); vertices of those
+    /// are flipped onto the crease (within a brick, the two vertices are
+    /// merged instead where they found the same stretch of crease); cells
+    /// beside a feature are tested too even where their corner samples
+    /// look flat; vertices of those
     /// cells are moved onto the surface by Newton steps along their edges.
     /// The volume correction then leaves the vertices of features with
     /// flat sides, and vertices whose triangles are coplanar, where they
-    /// are. The output is deterministic for given options, but flips and
-    /// merges stop at brick faces, so it depends on the brick size there.
+    /// are. The output is deterministic for given options, but merges and
+    /// the test of the cells beside a feature stop at brick faces, so it
+    /// depends on the brick size there (a little, in small bricks).
     /// Ignored with [`CellMethod::Tetrahedra`].
     pub sharp: bool,
     /// Bytes the plan's own tables may take (the brick classes, one byte a

@@ -259,8 +259,16 @@ impl Plan {
                 }
                 // To global indices, in place (a fresh vector cost a page
                 // fault per 340 triangles); a table lookup, not a branch.
-                for t in w.tris.iter_mut() {
-                    *t = t.map(|v| globals[v as usize]);
+                if self.sharp {
+                    // Triangles a lower brick's flip took stay marked until
+                    // `cross_flips` of this group drops them.
+                    for t in w.tris.iter_mut().filter(|t| t[0] != u32::MAX) {
+                        *t = t.map(|v| globals[v as usize]);
+                    }
+                } else {
+                    for t in w.tris.iter_mut() {
+                        *t = t.map(|v| globals[v as usize]);
+                    }
                 }
                 if let Some(e) = w.edges.as_mut() {
                     for u in e.shared.iter_mut() {
@@ -270,6 +278,101 @@ impl Plan {
                 Ok(())
             },
         )
+    }
+}
+
+/// Sharp features across brick faces, after stage A of `g`: a fan
+/// triangle `f1 a b` of a brick of `g` and `f2 b a` of a brick above it (in
+/// `g` or `next`) on the same face segment are flipped into `f1 a f2` and
+/// `f2 b f1` where [`crate::sharp::flip`] finds both proper, as a brick
+/// does within itself. The lower brick takes both new triangles (its
+/// triangles may use the upper brick's vertices, not the other way round)
+/// and the upper brick's triangle goes; a pair of feature vertices is
+/// joined once at most. Pairs are taken in brick and triangle order, so
+/// the result does not depend on the grouping. The volume correction
+/// keeps the sums of the triangles before the flip (the vertices of
+/// features with flat sides do not move).
+fn cross_flips(h: f64, g: &mut Group, mut next: Option<&mut Group>) {
+    use std::collections::{HashMap, HashSet};
+    const DEAD: [u32; 3] = [u32::MAX; 3];
+    let mut at: HashMap<[u64; 2], (usize, usize)> = HashMap::new();
+    for grp in std::iter::once(&*g).chain(next.as_deref()) {
+        for (j, m) in grp.meshes.iter().enumerate() {
+            for (r, rim) in m.rims.iter().enumerate() {
+                at.insert(rim.keys, (grp.first + j, r));
+            }
+        }
+    }
+    let mut joined: HashSet<(u32, usize, u32)> = HashSet::new();
+    for j in 0..g.meshes.len() {
+        let lower = g.first + j;
+        for r in 0..g.meshes[j].rims.len() {
+            let rim = &g.meshes[j].rims[r];
+            let Some(&(upper, q)) = at.get(&[rim.keys[1], rim.keys[0]]) else {
+                continue;
+            };
+            let ta = g.work[j].tris[rim.tri as usize];
+            if upper <= lower || ta == DEAD {
+                continue;
+            }
+            // The upper brick's group, its triangle and `f2`'s global index
+            // (its triangles are global in `g`, still local in `next`).
+            let (ug, uj) = if g.holds(upper) {
+                (None, upper - g.first)
+            } else {
+                let n = next.as_deref().expect("the partner is in the window");
+                (Some(()), upper - n.first)
+            };
+            let (other, tb, f2) = match ug {
+                None => {
+                    let tb = g.work[uj].tris[g.meshes[uj].rims[q].tri as usize];
+                    (g.meshes[uj].rims[q].clone(), tb, tb[0])
+                }
+                Some(()) => {
+                    let n = next.as_deref().expect("the partner is in the window");
+                    let o = n.meshes[uj].rims[q].clone();
+                    let tb = n.work[uj].tris[o.tri as usize];
+                    (o, tb, n.offsets[uj] + tb[0])
+                }
+            };
+            if tb == DEAD || !joined.insert((ta[0], upper, tb[0])) {
+                continue;
+            }
+            if !crate::sharp::flip(rim.f, other.f, rim.a, rim.b, rim.na, rim.nb, h) {
+                joined.remove(&(ta[0], upper, tb[0]));
+                continue;
+            }
+            let [f1, a, b] = ta;
+            let w = &mut g.work[j];
+            w.tris[rim.tri as usize] = [f1, a, f2];
+            w.tris.push([f2, b, f1]);
+            if let Some(e) = w.edges.as_mut() {
+                // a -> b goes (shared); a -> f2, f2 -> f1, f1 -> f2 and
+                // f2 -> b come (f2 is in no face plane).
+                drop_use(&mut e.shared, [a, b]);
+                e.own_uses += 4;
+            }
+            let w = match ug {
+                None => &mut g.work[uj],
+                Some(()) => &mut next.as_deref_mut().expect("in the window").work[uj],
+            };
+            w.tris[other.tri as usize] = DEAD;
+            if let Some(e) = w.edges.as_mut() {
+                // f2 -> b' and a' -> f2 go with b' -> a' (shared).
+                drop_use(&mut e.shared, [tb[1], tb[2]]);
+                e.own_uses -= 2;
+            }
+        }
+    }
+    for w in &mut g.work {
+        w.tris.retain(|t| *t != DEAD);
+    }
+}
+
+/// Removes the first use `u` from `shared`.
+fn drop_use(shared: &mut Vec<[u32; 2]>, u: [u32; 2]) {
+    if let Some(i) = shared.iter().position(|&x| x == u) {
+        shared.remove(i);
     }
 }
 
@@ -396,6 +499,9 @@ pub fn run(
         let (emitted, after) = rayon::join(
             || -> Result<(), MeshError> {
                 plan.stage_a(&mut g, next.as_ref())?;
+                if plan.sharp {
+                    cross_flips(plan.grid.h, &mut g, next.as_mut());
+                }
                 stage_b(&mut g, next.as_mut());
                 stage_c(&mut g, plan.grid.h, &clamp, plan.sharp);
                 sink.vertices(&g.verts)?;

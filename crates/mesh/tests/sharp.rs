@@ -200,12 +200,14 @@ fn meets_targets(f: &Figures) -> bool {
 
 #[test]
 fn rotated_box_keeps_its_corners_and_most_of_its_edges() {
-    // In bricks of 32 cells (the default) flips stop at brick faces: the
-    // crease is cut where it crosses one.
+    // In small bricks (8 cells) a crease still loses a little where it
+    // crosses brick faces often: flips cross them, but merges of two
+    // feature vertices and the test of flat-looking cells beside a feature
+    // stop there.
     for n in [32, 64] {
         let before = box_figures(rotation(), HALF, n, false, 32);
         println!("rotated box {n}, chamfered: {before:?}");
-        for brick in [256, 32] {
+        for brick in [256, 32, 8] {
             let f = box_figures(rotation(), HALF, n, true, brick);
             println!("rotated box {n}, sharp, bricks of {brick}: {f:?}");
             assert!(sound(&f.report), "{f:?}");
@@ -220,7 +222,7 @@ fn rotated_box_keeps_its_corners_and_most_of_its_edges() {
 #[test]
 fn rotated_box_meets_the_acceptance_targets() {
     for n in [32, 64] {
-        for brick in [256] {
+        for brick in [256, 32] {
             let f = box_figures(rotation(), HALF, n, true, brick);
             assert!(sound(&f.report) && meets_targets(&f), "{n} {brick}: {f:?}");
         }
