@@ -35,6 +35,7 @@ pub mod cubes;
 mod grid;
 pub mod job;
 mod lanes;
+pub mod measure;
 pub mod memory;
 mod pipeline;
 mod refine;

@@ -4,6 +4,7 @@
 
 use microfrep_core::{Expr, PointEval, Shape};
 use microfrep_mesh::check::{check, CheckReport};
+use microfrep_mesh::measure::to_mesh;
 use microfrep_mesh::{Mesh, MeshOptions, Plan};
 use microfrep_structures::examples::toriball;
 
@@ -54,61 +55,8 @@ fn mesh(e: &Expr, bounds: [[f64; 3]; 2], n: usize, sharp: bool) -> (Mesh, CheckR
     (m, r)
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Distance from `p` to the triangle `a b c` (the nearest point found by
-/// the region of the triangle's plane it projects to).
-fn point_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
-    let (d1, d2) = (dot(ab, ap), dot(ac, ap));
-    let at = |q: [f64; 3]| dot(sub(p, q), sub(p, q)).sqrt();
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return at(a);
-    }
-    let bp = sub(p, b);
-    let (d3, d4) = (dot(ab, bp), dot(ac, bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return at(b);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let t = d1 / (d1 - d3);
-        return at(std::array::from_fn(|k| a[k] + t * ab[k]));
-    }
-    let cp = sub(p, c);
-    let (d5, d6) = (dot(ab, cp), dot(ac, cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return at(c);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let t = d2 / (d2 - d6);
-        return at(std::array::from_fn(|k| a[k] + t * ac[k]));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        let bc = sub(c, b);
-        return at(std::array::from_fn(|k| b[k] + t * bc[k]));
-    }
-    let den = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * den, vc * den);
-    at(std::array::from_fn(|k| a[k] + v * ab[k] + w * ac[k]))
-}
-
-/// Distance from `p` to the nearest triangle of `m`.
-fn to_mesh(m: &Mesh, p: [f64; 3]) -> f64 {
-    let v = |i: u32| m.vertices[i as usize].map(|c| c as f64);
-    m.triangles
-        .iter()
-        .map(|t| point_triangle(p, v(t[0]), v(t[1]), v(t[2])))
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// Figures of a mesh of the box with frame `r` and half sizes `s`, in
