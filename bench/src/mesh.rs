@@ -5,7 +5,9 @@
 //! error (reference: 1.6378 by Monte Carlo, +- 0.0003); also meshing
 //! without the volume correction (`microfrep_nocorr_s`, and
 //! `correction_cost`, the time with it over the time without). Times are
-//! medians of 3 interleaved rounds (marching tetrahedra: one run).
+//! medians of 3 interleaved rounds (marching tetrahedra: one run). Then
+//! the rotated box of the sharp-feature issue, by both meshers, against
+//! the exact box (`rotated_box`).
 
 use crate::to_fidget::translate;
 use fidget::jit::JitFunction;
@@ -140,7 +142,158 @@ pub fn run() -> Result<(), String> {
             ms / nocorr_s,
         );
     }
+    rotated_box(&ours, &theirs)?;
     gyroid_sheet_job(&ours)
+}
+
+/// The rotated box of the sharp-feature issue (half sizes 0.6, 0.4, 0.3,
+/// turned 20 degrees about z, then 15 about x, in [-1, 1]^3) at 32 and 64
+/// cells: microfrep with and without sharp features against fidget's
+/// octree at depth 5 and 6, each mesh measured against the exact box
+/// (largest distance of a vertex from its surface, of points of its 12
+/// edges and of its corners from the mesh, all in cells; volume error) and
+/// timed (median of 3).
+fn rotated_box(ours: &rayon::ThreadPool, theirs: &ThreadPool) -> Result<(), String> {
+    use microfrep_core::Expr;
+    use microfrep_mesh::measure::to_mesh;
+    let (a, b) = (20f64.to_radians(), 15f64.to_radians());
+    let rz = [
+        [a.cos(), -a.sin(), 0.0],
+        [a.sin(), a.cos(), 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let rx = [
+        [1.0, 0.0, 0.0],
+        [0.0, b.cos(), -b.sin()],
+        [0.0, b.sin(), b.cos()],
+    ];
+    let r: [[f64; 3]; 3] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| (0..3).map(|k| rx[i][k] * rz[k][j]).sum::<f64>())
+    });
+    let half = [0.6, 0.4, 0.3];
+    let p = Expr::xyz();
+    let mut e: Option<Expr> = None;
+    for k in 0..3 {
+        let q = &p[0] * r[0][k] + &p[1] * r[1][k] + &p[2] * r[2][k];
+        let faces = (half[k] - &q).min(&(half[k] + &q));
+        e = Some(match e {
+            None => faces,
+            Some(g) => g.min(&faces),
+        });
+    }
+    let e = e.ok_or("no faces")?;
+    let world = |q: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|i| (0..3).map(|k| r[i][k] * q[k]).sum::<f64>())
+    };
+    let corners: Vec<[f64; 3]> = (0..8)
+        .map(|c| std::array::from_fn(|k| if c >> k & 1 == 1 { half[k] } else { -half[k] }))
+        .collect();
+    let mut edges = Vec::new();
+    for (i, a) in corners.iter().enumerate() {
+        for b in &corners[i + 1..] {
+            if (0..3).filter(|&k| a[k] != b[k]).count() == 1 {
+                for t in 1..40 {
+                    let t = t as f64 / 40.0;
+                    edges.push(world(std::array::from_fn(|k| a[k] + t * (b[k] - a[k]))));
+                }
+            }
+        }
+    }
+    let corners: Vec<[f64; 3]> = corners.into_iter().map(world).collect();
+    let exact = 8.0 * half[0] * half[1] * half[2];
+    // Figures in cells of `h`: vertices off, edges, corners, volume error.
+    let figures = |m: &Mesh, h: f64| -> String {
+        let vertex = m
+            .vertices
+            .iter()
+            .map(|v| {
+                let v = v.map(|c| c as f64);
+                let q: [f64; 3] = std::array::from_fn(|k| (0..3).map(|i| r[i][k] * v[i]).sum());
+                let out: [f64; 3] = std::array::from_fn(|k| (q[k].abs() - half[k]).max(0.0));
+                let o = (out[0] * out[0] + out[1] * out[1] + out[2] * out[2]).sqrt();
+                if o > 0.0 {
+                    o
+                } else {
+                    (0..3)
+                        .map(|k| half[k] - q[k].abs())
+                        .fold(f64::INFINITY, f64::min)
+                }
+            })
+            .fold(0.0, f64::max);
+        let far = |pts: &[[f64; 3]]| pts.iter().map(|&q| to_mesh(m, q)).fold(0.0, f64::max);
+        let c = check(m);
+        format!(
+            "vertex_cells={:.4} edge_cells={:.4} corner_cells={:.4} vol_err={:.2e} tris={} bad_edges={}",
+            vertex / h,
+            far(&edges) / h,
+            far(&corners) / h,
+            (c.volume.abs() - exact) / exact,
+            c.triangles,
+            c.bad_edges
+        )
+    };
+    let (ctx, root) = translate(&e)?;
+    let shape = Shape::<JitFunction>::new(&ctx, root).map_err(|e| e.to_string())?;
+    let bound: BoundShape<JitFunction, f32> = shape.try_into().map_err(|e| format!("{e:?}"))?;
+    for (n, depth) in [(32usize, 5u8), (64, 6)] {
+        let run_ours = |sharp: bool| -> Result<(Mesh, f64), String> {
+            let mut o = MeshOptions::new([[-1.0; 3], [1.0; 3]], n);
+            o.sharp = sharp;
+            let mut ts = vec![];
+            let mut kept = None;
+            for _ in 0..REPS {
+                let t = Instant::now();
+                let m = ours.install(|| {
+                    Plan::new(&microfrep_core::Shape::from(&e), &o)
+                        .and_then(|p| p.run(&|_| {}))
+                        .map_err(|e| e.to_string())
+                })?;
+                ts.push(t.elapsed().as_secs_f64());
+                kept = Some(m);
+            }
+            Ok((kept.ok_or("no rounds")?, median(ts)))
+        };
+        let h = microfrep_mesh::Grid::new([[-1.0; 3], [1.0; 3]], n, 32)
+            .map_err(|e| e.to_string())?
+            .h;
+        let (plain, plain_s) = run_ours(false)?;
+        let (sharp, sharp_s) = run_ours(true)?;
+        let settings = fidget::mesh::Settings {
+            depth,
+            threads: Some(theirs),
+            ..Default::default()
+        };
+        let mut ts = vec![];
+        let mut kept = None;
+        for _ in 0..REPS {
+            let t = Instant::now();
+            let fm = fidget::mesh::Octree::build(&bound, &settings)
+                .ok_or("fidget meshing was cancelled")?
+                .walk_dual();
+            ts.push(t.elapsed().as_secs_f64());
+            kept = Some(fm);
+        }
+        let fm = kept.ok_or("no rounds")?;
+        let fm = Mesh {
+            vertices: fm.vertices.iter().map(|v| [v.x, v.y, v.z]).collect(),
+            triangles: fm
+                .triangles
+                .iter()
+                .map(|t| [t.x as u32, t.y as u32, t.z as u32])
+                .collect(),
+        };
+        // fidget's cells: 2 / 2^depth.
+        let fh = 2.0 / (1u32 << depth) as f64;
+        println!(
+            "RESULT rotated_box_{n} sharp: {} s={sharp_s:.4} | plain: {} s={plain_s:.4} | \
+             fidget_depth_{depth}: {} s={:.4}",
+            figures(&sharp, h),
+            figures(&plain, h),
+            figures(&fm, fh),
+            median(ts)
+        );
+    }
+    Ok(())
 }
 
 /// The whole `microfrep mesh` job (bounds found by interval analysis, the
