@@ -35,6 +35,26 @@ pub trait Field: Send + Sync + Debug {
             out[i] = self.eval([x[i] as f64, y[i] as f64, z[i] as f64]) as f32;
         }
     }
+    /// Where the ray `origin + t dir`, `t` in `range`, first enters the
+    /// inside (`f >= 0`), for a field that can find that directly (a mesh
+    /// by intersecting its triangles) instead of by sampling. A ray caster
+    /// of a model that is this field alone may use the answer in place of
+    /// its own search. The default: [`RayEntry::Unknown`].
+    fn ray_entry(&self, _origin: [f64; 3], _dir: [f64; 3], _range: [f64; 2]) -> RayEntry {
+        RayEntry::Unknown
+    }
+}
+
+/// What [`Field::ray_entry`] knows about a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RayEntry {
+    /// Nothing: the caller searches the ray itself.
+    Unknown,
+    /// The ray stays outside over its whole range.
+    Miss,
+    /// The ray is outside before this depth and meets the surface there,
+    /// entering the inside.
+    Enter(f64),
 }
 
 /// Regular grid of samples over a box with trilinear interpolation; outside

@@ -40,7 +40,7 @@ pub use eval::{
     PointEvaluator, BLOCK,
 };
 pub use expr::{Axis, Expr, ExprNode};
-pub use field::{Field, GridField};
+pub use field::{Field, GridField, RayEntry};
 pub use graph::{Graph, Node, NodeId};
 pub use interval::Interval;
 pub use ops::{BinaryOp, SetOp, UnaryOp};

@@ -57,6 +57,87 @@ impl Node {
         }
         d
     }
+
+    /// Depth at which the ray `o + t d` (`inv` the reciprocals of `d`)
+    /// enters the box within `[t0, t1]`, if it meets the box there. The
+    /// slabs are widened by a relative 1e-12 so rounding never loses a ray
+    /// that grazes a face of the box.
+    #[inline]
+    pub fn ray_entry(
+        &self,
+        o: [f64; 3],
+        d: [f64; 3],
+        inv: [f64; 3],
+        t0: f64,
+        t1: f64,
+    ) -> Option<f64> {
+        let (mut a, mut b) = (t0, t1);
+        for k in 0..3 {
+            let (lo, hi) = (self.lo[k] as f64, self.hi[k] as f64);
+            let pad = 1e-12 * (hi - lo).abs().max(lo.abs()).max(hi.abs());
+            let (lo, hi) = (lo - pad, hi + pad);
+            if d[k] == 0.0 {
+                if o[k] < lo || o[k] > hi {
+                    return None;
+                }
+                continue;
+            }
+            let (p, q) = ((lo - o[k]) * inv[k], (hi - o[k]) * inv[k]);
+            let (p, q) = if p <= q { (p, q) } else { (q, p) };
+            // Widened a little too, against rounding of the products.
+            let w = 1e-12 * (p.abs().max(q.abs()));
+            a = a.max(p - w);
+            b = b.min(q + w);
+            if !(a <= b) {
+                return None;
+            }
+        }
+        Some(a)
+    }
+}
+
+/// How far outside a triangle (in barycentric units) a ray may pass and
+/// still count as crossing it in [`Bvh::first_hit`]: wide enough to close
+/// the cracks rounding opens between neighbours, far below any pixel.
+pub const RAY_EDGE_SLACK: f64 = 1e-9;
+
+/// Depth at which the ray `o + t d` crosses the triangle `tri`, if it does
+/// (within [`RAY_EDGE_SLACK`] of its edges); `None` for a ray in the
+/// triangle's plane or a degenerate triangle.
+#[inline]
+pub fn ray_triangle(o: [f64; 3], d: [f64; 3], tri: &[[f64; 3]; 3]) -> Option<f64> {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let e1 = sub(tri[1], tri[0]);
+    let e2 = sub(tri[2], tri[0]);
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    // A ray (nearly) in the plane: its neighbours across the plane's
+    // edges are met instead.
+    let scale = dot(e1, e1).sqrt() * dot(e2, e2).sqrt() * dot(d, d).sqrt();
+    if !(det.abs() > 1e-14 * scale) {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(o, tri[0]);
+    let u = dot(tv, pv) * inv;
+    if !(-RAY_EDGE_SLACK..=1.0 + RAY_EDGE_SLACK).contains(&u) {
+        return None;
+    }
+    let qv = cross(tv, e1);
+    let v = dot(d, qv) * inv;
+    if !(v >= -RAY_EDGE_SLACK && u + v <= 1.0 + RAY_EDGE_SLACK) {
+        return None;
+    }
+    let t = dot(e2, qv) * inv;
+    t.is_finite().then_some(t)
 }
 
 fn down32(x: f64) -> f32 {
@@ -491,6 +572,74 @@ impl Bvh {
             }
         }
         best
+    }
+
+    /// The first triangle the ray `o + t d` crosses with `t` in
+    /// `range`: its depth and index (leaf order). Triangles are tested in
+    /// f64 (Moller-Trumbore) with their barycentric bounds widened by
+    /// [`RAY_EDGE_SLACK`], so a ray through an edge or a vertex shared by
+    /// several triangles meets at least one of them despite rounding;
+    /// degenerate triangles and rays in a triangle's plane are skipped.
+    /// Ties keep the first found in the fixed traversal order, so the
+    /// answer depends only on the tree and the ray.
+    pub fn first_hit(&self, o: [f64; 3], d: [f64; 3], range: [f64; 2]) -> Option<(f64, u32)> {
+        let inv = d.map(|c| 1.0 / c);
+        let (t0, mut best) = (range[0], range[1]);
+        if !(t0 <= best) || self.nodes.is_empty() {
+            return None;
+        }
+        let mut found = None;
+        let mut stack = [(0u32, 0.0f64); STACK];
+        let mut sp = 0;
+        if let Some(te) = self.nodes[0].ray_entry(o, d, inv, t0, best) {
+            stack[0] = (0, te);
+            sp = 1;
+        }
+        while sp > 0 {
+            sp -= 1;
+            let (ni, te) = stack[sp];
+            if te > best {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            if node.is_leaf() {
+                let s = node.index as usize;
+                for t in s..s + node.count as usize {
+                    if self.degenerate[t] {
+                        continue;
+                    }
+                    if let Some(th) = ray_triangle(o, d, &self.tris[t]) {
+                        if th >= t0 && th <= best && (found.is_none() || th < best) {
+                            best = th;
+                            found = Some((th, t as u32));
+                        }
+                    }
+                }
+            } else {
+                let (l, r) = (ni + 1, node.index);
+                let el = self.nodes[l as usize].ray_entry(o, d, inv, t0, best);
+                let er = self.nodes[r as usize].ray_entry(o, d, inv, t0, best);
+                // Push the farther child first so the nearer is searched
+                // first and its hits prune the other.
+                let mut push = |n: u32, e: Option<f64>| {
+                    if let Some(e) = e {
+                        stack[sp] = (n, e);
+                        sp += 1;
+                    }
+                };
+                match (el, er) {
+                    (Some(a), Some(b)) if b < a => {
+                        push(l, el);
+                        push(r, er);
+                    }
+                    _ => {
+                        push(r, er);
+                        push(l, el);
+                    }
+                }
+            }
+        }
+        found
     }
 
     /// Depth of the tree (the root alone is 1).

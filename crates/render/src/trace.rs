@@ -14,9 +14,19 @@
 //! has a quarter of its interval evaluations decide anything, the bounds
 //! are too loose to help, and the next rays of the tile are sampled without
 //! them.
+//!
+//! A model that is one data field alone (a mesh bound as the whole model)
+//! is first asked where each ray enters it ([`Field::ray_entry`]): a mesh
+//! answers by intersecting the ray with its triangles through its BVH,
+//! exactly and in one traversal, where the search above would evaluate
+//! the distance and the sign of the winding number at dozens of points.
+//! Rays the field cannot answer are searched as above.
 
 use crate::camera::{Camera, V3};
-use microfrep_core::{BatchEval, Interval, IntervalEval, PointEval, Tape, BLOCK};
+use microfrep_core::{
+    BatchEval, Field, Interval, IntervalEval, Op, PointEval, RayEntry, Tape, BLOCK,
+};
+use std::sync::Arc;
 
 /// Bisection steps after a hit: depth error below half a pixel / 2^14.
 const BISECT: usize = 14;
@@ -38,6 +48,31 @@ pub struct Tracer<'t> {
     /// Whether at least a quarter of the last ray's interval evaluations
     /// decided their segment.
     bounds_help: bool,
+    /// The field the model is, where the model is one data field at the
+    /// coordinates themselves: asked first where each ray enters it
+    /// ([`Field::ray_entry`]).
+    direct: Option<Arc<dyn Field>>,
+}
+
+/// The field a tape's output 0 is, when that output is field value of the
+/// coordinates `x, y, z` unchanged.
+fn bare_field(tape: &Tape) -> Option<Arc<dyn Field>> {
+    let ops = tape.ops();
+    let out = *tape.outputs().first()? as usize;
+    match ops.get(out)? {
+        Op::Field {
+            field,
+            comp: 0,
+            args,
+        } => {
+            let plain = (0..3)
+                .all(|k| matches!(ops.get(args[k] as usize), Some(Op::Var(a)) if *a as usize == k));
+            plain
+                .then(|| tape.fields().get(*field as usize).cloned())
+                .flatten()
+        }
+        _ => None,
+    }
 }
 
 impl<'t> Tracer<'t> {
@@ -51,6 +86,24 @@ impl<'t> Tracer<'t> {
             pe: PointEval::new(tape),
             batch: BatchEval::new(tape),
             bounds_help: true,
+            direct: bare_field(tape),
+        }
+    }
+
+    /// The first hit of the ray through `(u, v)` over `t` as the field
+    /// finds it directly, `None` where it cannot tell. An entry depth is
+    /// moved inside by the bisection's tolerance, as a bisected hit is, so
+    /// the normal there is the surface's, not the rounding's.
+    fn direct_ray(&self, u: f64, v: f64, t: [f64; 2]) -> Option<Option<f64>> {
+        let f = self.direct.as_ref()?;
+        let o = self.cam.point(u, v, 0.0);
+        match f.ray_entry(o, self.cam.dir, t) {
+            RayEntry::Unknown => None,
+            RayEntry::Miss => Some(None),
+            RayEntry::Enter(e) => {
+                let nudge = FINE_PIXELS * self.cam.scale * 0.5f64.powi(BISECT as i32);
+                Some(Some((e + nudge).min(t[1])))
+            }
         }
     }
 
@@ -99,6 +152,17 @@ impl<'t> Tracer<'t> {
             }
         }
         if active.is_empty() {
+            return hits;
+        }
+        if self.direct.is_some() {
+            // The field answers ray by ray; the shared interval search
+            // would only repeat its work.
+            for &(idx, u, v, range) in &active {
+                hits[idx] = match self.direct_ray(u, v, range) {
+                    Some(h) => h,
+                    None => self.ray(u, v, range),
+                };
+            }
             return hits;
         }
         let t0 = active.iter().map(|r| r.3[0]).fold(f64::INFINITY, f64::min);
@@ -162,7 +226,10 @@ impl<'t> Tracer<'t> {
     pub fn pixel(&mut self, px: usize, py: usize) -> Option<f64> {
         let (u, v) = self.cam.screen(px as f64, py as f64);
         let range = self.clip(u, v)?;
-        self.ray(u, v, range)
+        match self.direct_ray(u, v, range) {
+            Some(h) => h,
+            None => self.ray(u, v, range),
+        }
     }
 
     fn ray(&mut self, u: f64, v: f64, t: [f64; 2]) -> Option<f64> {
