@@ -210,7 +210,7 @@ impl GradBatchEval {
                         args,
                     } => {
                         let (ov, od) = o(out);
-                        let q = args.map(|r| a(r));
+                        let q = args.map(a);
                         let f = &*self.tape.fields()[field as usize];
                         if comp == 0 {
                             let (x, y, z) = (q[0].0, q[1].0, q[2].0);
