@@ -1,6 +1,7 @@
 //! The f32 batch evaluator: the tape, lowered to a [`plan::Plan`], runs one
 //! step at a time over blocks of lanes with loops the compiler vectorises.
 
+pub(crate) mod grad;
 pub(crate) mod plan;
 
 use crate::ops::SetOp;

@@ -1,4 +1,3 @@
-use super::batch::BLOCK;
 use super::deriv::{binary_partials, powi_derivative, unary_derivative};
 use crate::field::Field;
 use crate::tape::{Op, Tape};
@@ -28,7 +27,7 @@ fn lin2(da: &[f64; 3], ka: f64, db: &[f64; 3], kb: f64) -> [f64; 3] {
 }
 
 /// Chain rule through a field: d f(q(p)) = sum_k (df/dq_k) dq_k.
-fn field_dual(f: &dyn Field, comp: u8, q: [Dual; 3]) -> Dual {
+pub(in crate::eval) fn field_dual(f: &dyn Field, comp: u8, q: [Dual; 3]) -> Dual {
     let pos = [q[0].0, q[1].0, q[2].0];
     let (v, g) = if comp == 0 {
         f.grad(pos)
@@ -138,41 +137,5 @@ impl GradEval {
             };
         }
         s[self.tape.outputs()[k] as usize]
-    }
-}
-
-/// Batched gradients in f32: value and the three partials for many points,
-/// e.g. the normals of every vertex of a mesh. Each block is computed with
-/// the f64 rules and stored as f32.
-pub struct GradBatchEval {
-    inner: GradEval,
-}
-
-impl GradBatchEval {
-    /// An evaluator of `tape` with the parameters at their defaults.
-    pub fn new(tape: &Tape) -> Self {
-        GradBatchEval {
-            inner: GradEval::new(tape),
-        }
-    }
-
-    /// Sets parameter `index` (see [`Tape::param_index`]).
-    pub fn set_param(&mut self, index: usize, v: f64) {
-        self.inner.set_param(index, v);
-    }
-
-    /// Fills `out` with value and gradient `[v, dx, dy, dz]` at each point.
-    pub fn eval(&mut self, x: &[f32], y: &[f32], z: &[f32], out: &mut [[f32; 4]]) {
-        let n = out.len();
-        assert!(
-            x.len() == n && y.len() == n && z.len() == n,
-            "slice lengths differ"
-        );
-        for start in (0..n).step_by(BLOCK) {
-            for i in start..(start + BLOCK).min(n) {
-                let (v, g) = self.inner.eval([x[i] as f64, y[i] as f64, z[i] as f64]);
-                out[i] = [v as f32, g[0] as f32, g[1] as f32, g[2] as f32];
-            }
-        }
     }
 }

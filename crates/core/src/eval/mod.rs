@@ -18,9 +18,10 @@ mod interval;
 mod parallel;
 mod point;
 
+pub use batch::grad::GradBatchEval;
 pub use batch::{BatchEval, BLOCK};
 pub use deriv::{binary_partials, unary_derivative};
-pub use grad::{GradBatchEval, GradEval};
+pub use grad::GradEval;
 pub use interval::IntervalEval;
 pub use parallel::{eval_grid_par, eval_points_par};
 pub use point::PointEval;
