@@ -29,7 +29,7 @@ const SUITES: &[(&str, &str)] = &[
     ),
     (
         "mesh",
-        "tori-ball block meshing (128^3, 256^3) vs fidget's octree mesher, 2 threads",
+        "tori-ball block meshing (128^3, 256^3) and a rotated box (sharp features) vs fidget's octree mesher, 2 threads; PLY vs STL job",
     ),
     (
         "hyperfun",
