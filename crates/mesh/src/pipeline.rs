@@ -317,31 +317,26 @@ fn cross_flips(h: f64, g: &mut Group, mut next: Option<&mut Group>) {
             }
             // The upper brick's group, its triangle and `f2`'s global index
             // (its triangles are global in `g`, still local in `next`).
-            let (ug, uj) = if g.holds(upper) {
-                (None, upper - g.first)
+            let here = g.holds(upper);
+            let (other, tb, f2, uj) = if here {
+                let uj = upper - g.first;
+                let o = g.meshes[uj].rims[q].clone();
+                let tb = g.work[uj].tris[o.tri as usize];
+                (o, tb, tb[0], uj)
             } else {
                 let n = next.as_deref().expect("the partner is in the window");
-                (Some(()), upper - n.first)
+                let uj = upper - n.first;
+                let o = n.meshes[uj].rims[q].clone();
+                let tb = n.work[uj].tris[o.tri as usize];
+                (o, tb, n.offsets[uj] + tb[0], uj)
             };
-            let (other, tb, f2) = match ug {
-                None => {
-                    let tb = g.work[uj].tris[g.meshes[uj].rims[q].tri as usize];
-                    (g.meshes[uj].rims[q].clone(), tb, tb[0])
-                }
-                Some(()) => {
-                    let n = next.as_deref().expect("the partner is in the window");
-                    let o = n.meshes[uj].rims[q].clone();
-                    let tb = n.work[uj].tris[o.tri as usize];
-                    (o, tb, n.offsets[uj] + tb[0])
-                }
-            };
-            if tb == DEAD || !joined.insert((ta[0], upper, tb[0])) {
+            if tb == DEAD
+                || joined.contains(&(ta[0], upper, tb[0]))
+                || !crate::sharp::flip(rim.f, other.f, rim.a, rim.b, rim.na, rim.nb, h)
+            {
                 continue;
             }
-            if !crate::sharp::flip(rim.f, other.f, rim.a, rim.b, rim.na, rim.nb, h) {
-                joined.remove(&(ta[0], upper, tb[0]));
-                continue;
-            }
+            joined.insert((ta[0], upper, tb[0]));
             let [f1, a, b] = ta;
             let w = &mut g.work[j];
             w.tris[rim.tri as usize] = [f1, a, f2];
@@ -352,9 +347,10 @@ fn cross_flips(h: f64, g: &mut Group, mut next: Option<&mut Group>) {
                 drop_use(&mut e.shared, [a, b]);
                 e.own_uses += 4;
             }
-            let w = match ug {
-                None => &mut g.work[uj],
-                Some(()) => &mut next.as_deref_mut().expect("in the window").work[uj],
+            let w = if here {
+                &mut g.work[uj]
+            } else {
+                &mut next.as_deref_mut().expect("in the window").work[uj]
             };
             w.tris[other.tri as usize] = DEAD;
             if let Some(e) = w.edges.as_mut() {
