@@ -40,6 +40,18 @@ const THREADS: usize = 2;
 /// Interleaved rounds per tori-ball size.
 const REPS: usize = 3;
 
+/// A fidget mesh as ours, for the checks.
+fn from_fidget(fm: &fidget::mesh::Mesh) -> Mesh {
+    Mesh {
+        vertices: fm.vertices.iter().map(|v| [v.x, v.y, v.z]).collect(),
+        triangles: fm
+            .triangles
+            .iter()
+            .map(|t| [t.x as u32, t.y as u32, t.z as u32])
+            .collect(),
+    }
+}
+
 /// The median of `ts`.
 fn median(mut ts: Vec<f64>) -> f64 {
     ts.sort_by(f64::total_cmp);
@@ -115,14 +127,7 @@ pub fn run() -> Result<(), String> {
             median(theirs_t),
             median(theirs_c),
         );
-        let fm = Mesh {
-            vertices: fm.vertices.iter().map(|v| [v.x, v.y, v.z]).collect(),
-            triangles: fm
-                .triangles
-                .iter()
-                .map(|t| [t.x as u32, t.y as u32, t.z as u32])
-                .collect(),
-        };
+        let fm = from_fidget(&fm);
         let (a, b) = (check(&m), check(&fm));
         println!(
             "RESULT toriball_{n} microfrep_s={ms:.3} fidget_s={fs:.3} ratio={:.1} \
@@ -322,14 +327,7 @@ fn rotated_box(ours: &rayon::ThreadPool, theirs: &ThreadPool) -> Result<(), Stri
             kept = Some(fm);
         }
         let fm = kept.ok_or("no rounds")?;
-        let fm = Mesh {
-            vertices: fm.vertices.iter().map(|v| [v.x, v.y, v.z]).collect(),
-            triangles: fm
-                .triangles
-                .iter()
-                .map(|t| [t.x as u32, t.y as u32, t.z as u32])
-                .collect(),
-        };
+        let fm = from_fidget(&fm);
         // fidget's cells: 2 / 2^depth.
         let fh = 2.0 / (1u32 << depth) as f64;
         println!(
