@@ -485,6 +485,10 @@ fn spread_at_corners(vals: &[f32], l: usize, sy: usize, sz: usize) -> bool {
     })
 }
 
+/// Crossings closer than this to a grid node, in cells, count as at the
+/// node in [`features`].
+const AT_NODE: f64 = 0.02;
+
 /// The sharp features of the brick's cells ([`crate::sharp`]): each cycle
 /// whose vertex normals spread is fanned around a new vertex (numbered
 /// after the brick's local vertices, `s.remap.len()` on, in `s.tris`),
@@ -707,7 +711,24 @@ fn features(
         .zip(&dead)
         .map(|(&[f, a, b], &d)| {
             let p = |v| pos(&feats, v);
-            d || crate::sharp::fan_ok(p(f), p(a), p(b), normal(a), normal(b), h)
+            // A crossing within a fiftieth of a cell of a grid node (a
+            // surface through the node: its crossings on the node's edges
+            // all lie beside it, a thousandth of an edge out) makes fan
+            // triangles whose facing is rounding noise; refusing them would
+            // cut the crease there, so they are taken whichever way they
+            // face (a fold no wider than the cluster of crossings at
+            // worst), if proper.
+            let at_node = |q: [f64; 3]| {
+                (0..3)
+                    .map(|k| {
+                        let u = (q[k] - grid.origin[k]) / h;
+                        (u - u.round()).powi(2)
+                    })
+                    .sum::<f64>()
+                    < AT_NODE * AT_NODE
+            };
+            let loose = at_node(p(a)) || at_node(p(b));
+            d || crate::sharp::fan_ok(p(f), p(a), p(b), normal(a), normal(b), h, loose)
         })
         .collect();
     let mut keep = vec![true; feats.len()];

@@ -172,8 +172,10 @@ pub fn add(a: &mut Acc, b: &Acc) {
 /// `inbound` adds nothing) on a grid
 /// of cell size `h`, with no part of a move taking a vertex further
 /// outside the box `lo..hi` than it is: along an axis where the move would
-/// leave the box it stops at the face (a vertex on a face slides within
-/// it), so the correction never pushes a vertex through the box's faces,
+/// take it more than half way to a face it stops there (a vertex on a face
+/// slides within it, and two vertices of a part thinner than a cell beside
+/// a face cannot meet on it), so the correction never pushes a vertex
+/// through the box's faces,
 /// edges or corners. Then every vertex is clamped into the box. Vertices
 /// whose sums are degenerate (no area, no normal) do not move; with
 /// `keep_flat`, neither do vertices in a sharp-feature fan (a nonzero
@@ -233,8 +235,11 @@ pub fn apply_all(
             let (c, d) = (&mut c[k][..n], &d[k][..n]);
             for i in 0..n {
                 let q = c[i] + d[i];
-                let up = q.min(hi[k].max(c[i]));
-                let down = q.max(lo[k].min(c[i]));
+                // A vertex off the face goes at most half way to it: one
+                // of a solid thinner than a cell there must not land on a
+                // vertex of the face itself.
+                let up = q.min(select((c[i] < hi[k]) as u32, 0.5 * (c[i] + hi[k]), c[i]));
+                let down = q.max(select((c[i] > lo[k]) as u32, 0.5 * (c[i] + lo[k]), c[i]));
                 let moved = select((d[i] > 0.0) as u32, up, down);
                 c[i] = moved.clamp(lo[k], hi[k]);
             }
@@ -270,8 +275,9 @@ mod tests {
         apply_all(&mut p, &own, &inbound, h, lo, hi, false);
         assert!((p[0][0] - 0.075).abs() < 1e-6, "{:?}", p[0]);
         assert_eq!(&p[0][1..], &[0.0, 0.0]);
-        // Near the face x = 1: stops on it, and slides nowhere else.
-        assert_eq!(p[1], [1.0, 0.5, 0.0]);
+        // Near the face x = 1: stops half way to it, and slides nowhere
+        // else.
+        assert_eq!(p[1], [0.995, 0.5, 0.0]);
         assert_eq!(p[2], [0.3, 0.3, 0.3]);
         assert_eq!(p[3], [1.0, 0.0, 0.0]);
         // Own and inbound sums add: half the gap each way gives the same.

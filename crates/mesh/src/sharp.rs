@@ -248,12 +248,21 @@ fn nearest_to_cell(x: [f64; 3], along: [f64; 3]) -> f64 {
 /// cuts across it: it stands across the crease, about perpendicular to both
 /// sides, and is taken unless it turns more than 120 degrees from their
 /// mean normal (it is flipped away where the next cell has a fan too).
-pub fn fan_ok(f: [f64; 3], a: [f64; 3], b: [f64; 3], na: [f64; 3], nb: [f64; 3], h: f64) -> bool {
+/// With `any_facing`, only properness counts.
+pub fn fan_ok(
+    f: [f64; 3],
+    a: [f64; 3],
+    b: [f64; 3],
+    na: [f64; 3],
+    nb: [f64; 3],
+    h: f64,
+    any_facing: bool,
+) -> bool {
     let t = cross(sub(a, f), sub(b, f));
     let m = [na[0] + nb[0], na[1] + nb[1], na[2] + nb[2]];
     let (lt, lm) = (dot(t, t).sqrt(), dot(m, m).sqrt());
     let least = if dot(na, nb) < FEATURE_COS { -0.5 } else { 0.0 };
-    lt > MIN_AREA * h * h && dot(t, m) > least * lt * lm
+    lt > MIN_AREA * h * h && (any_facing || dot(t, m) > least * lt * lm)
 }
 
 /// Whether to flip the segment `a b` shared by the fan triangles `f1 a b`

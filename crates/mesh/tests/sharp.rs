@@ -159,7 +159,10 @@ fn rotated_box_keeps_its_corners_and_most_of_its_edges() {
             let f = box_figures(rotation(), HALF, n, true, brick);
             println!("rotated box {n}, sharp, bricks of {brick}: {f:?}");
             assert!(sound(&f.report), "{f:?}");
-            assert!(f.vertex < 0.02, "{n} {brick}: {f:?}");
+            // In bricks of 8 at 32 cells, the volume correction moves one
+            // vertex beside a crease cut at a brick face 0.07 cells out.
+            let vertex_max = if brick == 8 { 0.08 } else { 0.02 };
+            assert!(f.vertex < vertex_max, "{n} {brick}: {f:?}");
             assert!(f.corner < 0.1, "{n} {brick}: {f:?}");
             assert!(f.edge < 0.3 && f.edge < before.edge, "{n} {brick}: {f:?}");
             assert!(f.volume < 1e-3, "{n} {brick}: {f:?}");
@@ -506,11 +509,10 @@ fn held_out_parts_keep_their_creases() {
                 // rims are cut by up to 0.13 cells.
                 ("plate with holes", 32) => (0.02, 0.15),
                 ("plate with holes", 64) => (0.02, 0.06),
-                // A mesh part's flat faces come out 0.07 / 0.11 cells
-                // inside with or without sharp features and with the
-                // volume correction off (an analytic box: 0.014); not
-                // explained yet.
-                ("box from triangles", _) => (0.15, 0.05),
+                // At 64 cells one vertex beside a crease is moved 0.034
+                // cells out by the volume correction (the same for the
+                // analytic box of these sizes).
+                ("box from triangles", 64) => (0.04, 0.05),
                 _ => (0.02, 0.05),
             };
             assert!(off(&m1, true) < flat_max, "{name} {n}");
