@@ -206,7 +206,7 @@ pub(super) fn read_slice_refs<R: Read + Seek>(
                 .find(|s| s.id == ref_id)
                 .ok_or_else(|| {
                     invalid(
-                        &root,
+                        root,
                         offset,
                         format!("slicestack {ref_id} not found in /{part}"),
                     )

@@ -88,6 +88,7 @@ pub fn write_to<W: Write + Seek>(w: W, model: &Model, opts: &WriteOptions) -> Re
     // Plan the slice parts and image sheets first: the root part names them.
     let (slice_parts, slice_refs) = slice::plan_slice_parts(model, opts);
     let (sheets, sheet_names) = volumetric::plan_sheets(model);
+
     // [Content_Types].xml and the package relationships.
     let mut ct = String::from(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<Types xmlns=\"http://schemas.openxmlformats.org/package/2006/content-types\">",

@@ -24,7 +24,6 @@ pub(super) fn plan_sheets(model: &Model) -> (Vec<(String, u32, usize)>, HashMap<
             sheets.push((name, im.id, k));
         }
     }
-
     (sheets, sheet_names)
 }
 
