@@ -186,13 +186,9 @@ impl Parser<'_> {
 
     /// Closes a beam lattice element.
     pub(super) fn beam_end(&mut self, ctx: Ctx) -> Result<()> {
-        use Ctx::*;
-        match ctx {
-            BeamSet => {
-                let s = self.beamset.take().unwrap();
-                self.lattice.as_mut().unwrap().beam_sets.push(s);
-            }
-            _ => {}
+        if ctx == Ctx::BeamSet {
+            let s = self.beamset.take().unwrap();
+            self.lattice.as_mut().unwrap().beam_sets.push(s);
         }
         Ok(())
     }

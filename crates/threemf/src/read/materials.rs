@@ -148,15 +148,11 @@ impl Parser<'_> {
 
     /// Closes a material element.
     pub(super) fn material_end(&mut self, ctx: Ctx) -> Result<()> {
-        use Ctx::*;
-        match ctx {
-            ColorGroup => {
-                let g = self.model.color_groups.last().expect("just read");
-                if g.colors.is_empty() {
-                    return Err(self.err(format!("colorgroup {} has no colour", g.id)));
-                }
+        if ctx == Ctx::ColorGroup {
+            let g = self.model.color_groups.last().expect("just read");
+            if g.colors.is_empty() {
+                return Err(self.err(format!("colorgroup {} has no colour", g.id)));
             }
-            _ => {}
         }
         Ok(())
     }
