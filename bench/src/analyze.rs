@@ -268,14 +268,14 @@ fn json_number(text: &str, key: &str) -> Option<f64> {
 /// The Python with PoreSpy: `MICROFREP_PORESPY_PYTHON`, or the venv under
 /// target/, created on first use when the registry is reachable.
 fn porespy_python(dir: &Path) -> Option<PathBuf> {
-    let spec = microfrep::io::pyvenv::PythonSpec {
+    let spec = microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_PORESPY_PYTHON",
         venv: Path::new("target/porespy-venv"),
         check: "import porespy",
         packages: &["porespy"],
         log: &dir.join("porespy-install.log"),
     };
-    microfrep::io::pyvenv::python_with(&spec)
+    microfrep_testsupport::pyvenv::python_with(&spec)
         .map_err(|e| {
             eprintln!("bench/run analyze: PoreSpy not available ({e}); its columns read na")
         })

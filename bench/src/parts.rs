@@ -148,14 +148,14 @@ fn fill_vs_pipeline(dir: &Path) -> Result<(), String> {
         );
         return Ok(());
     }
-    let spec = microfrep::io::pyvenv::PythonSpec {
+    let spec = microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_FILL_PEER_PYTHON",
         venv: Path::new("target/fill-peer-venv"),
         check: "import igl, numpy, skimage, trimesh",
         packages: &["libigl", "numpy", "scikit-image", "trimesh"],
         log: &dir.join("fill-peer-install.log"),
     };
-    let python = microfrep::io::pyvenv::python_with(&spec)
+    let python = microfrep_testsupport::pyvenv::python_with(&spec)
         .map_err(|e| {
             eprintln!("bench/run parts: the fill peer is not available ({e}); its columns read na")
         })
@@ -618,14 +618,14 @@ fn libigl(
 /// The Python with libigl: `MICROFREP_LIBIGL_PYTHON`, or the venv under
 /// target/, created on first use.
 fn libigl_python(dir: &Path) -> Option<PathBuf> {
-    let spec = microfrep::io::pyvenv::PythonSpec {
+    let spec = microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_LIBIGL_PYTHON",
         venv: Path::new("target/libigl-venv"),
         check: "import igl, numpy",
         packages: &["libigl", "numpy"],
         log: &dir.join("libigl-install.log"),
     };
-    microfrep::io::pyvenv::python_with(&spec)
+    microfrep_testsupport::pyvenv::python_with(&spec)
         .map_err(|e| eprintln!("bench/run parts: libigl not available ({e}); its columns read na"))
         .ok()
 }

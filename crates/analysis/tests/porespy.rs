@@ -32,7 +32,7 @@ fn root() -> PathBuf {
 /// The Python with PoreSpy, or why there is none.
 fn python() -> Result<PathBuf, String> {
     let dir = root().join("target");
-    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+    microfrep_testsupport::pyvenv::python_with(&microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_PORESPY_PYTHON",
         venv: &dir.join("porespy-venv"),
         check: "import porespy",

@@ -2,6 +2,12 @@
 //! options and calls the library; the algorithms and the policies (memory,
 //! streaming, atomic outputs) live in the crates.
 
+// The doc comments of the options are their `--help` texts, which clap
+// prints as written: `a[K]`, `s[1]`, `X[,Y]` there are notation for the
+// user, not links (escaping them for rustdoc would show the backslashes in
+// the help).
+#![allow(rustdoc::broken_intra_doc_links)]
+
 mod analyze_cmd;
 mod cell_cmd;
 mod check_cmd;

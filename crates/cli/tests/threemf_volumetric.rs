@@ -105,7 +105,7 @@ fn voxels(m: &Model, r: &FunctionRef) -> Vec<([f64; 3], f64, f64)> {
 /// crates/threemf/tests/crosscheck.rs); a requested check without it fails.
 fn python() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target");
-    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+    microfrep_testsupport::pyvenv::python_with(&microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_3MF_PYTHON",
         venv: &dir.join("3mf-venv"),
         check: "import xmlschema, lib3mf",

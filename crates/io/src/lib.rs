@@ -19,8 +19,6 @@
 //!   coloured mesh writers and attribute renderings.
 //! - [`precision`]: the boxes and cells f32 sampling can resolve, and a
 //!   probe comparing a model's f32 and f64 values.
-//! - [`pyvenv`]: a Python with given packages, for the optional
-//!   cross-checks and the benchmarks against Python peers.
 //!
 //! ```
 //! use microfrep_io::atomic::AtomicFile;
@@ -45,7 +43,6 @@ pub mod format;
 pub mod limits;
 pub mod png;
 pub mod precision;
-pub mod pyvenv;
 pub mod text;
 
 pub use atomic::{AtomicDir, AtomicFile};

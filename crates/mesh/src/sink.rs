@@ -2,7 +2,7 @@
 //! final global order, a part at a time, so a mesh can be collected in
 //! memory or written to disk as it is made.
 
-use crate::check::BrickEdges;
+use crate::edges::BrickEdges;
 use crate::{Mesh, MeshError};
 
 /// The vertices a batch of triangles may use: two consecutive runs of the
@@ -41,7 +41,7 @@ pub trait MeshSink {
         self.triangles(&t, window)
     }
     /// Whether the sink takes an edge census
-    /// ([`crate::check::EdgeCensus`]). If so, the pipeline has every brick
+    /// ([`crate::edges::EdgeCensus`]). If so, the pipeline has every brick
     /// sort its edges while it meshes ([`BrickEdges`]) and hands them over
     /// with its triangles ([`Self::take_counted`]).
     fn counts_edges(&self) -> bool {
@@ -73,15 +73,15 @@ pub struct Collect {
     vertices: Vec<Vec<[f32; 3]>>,
     triangles: Vec<Vec<[u32; 3]>>,
     /// The edge census, when taken ([`Collect::counting`]).
-    census: Option<crate::check::EdgeCensus>,
+    census: Option<crate::edges::EdgeCensus>,
 }
 
 impl Collect {
     /// A sink that also counts the edges as they come, from the bricks
-    /// ([`crate::check::EdgeCensus::brick`]); see [`Collect::into_counted`].
+    /// ([`crate::edges::EdgeCensus::brick`]); see [`Collect::into_counted`].
     pub fn counting() -> Collect {
         Collect {
-            census: Some(crate::check::EdgeCensus::new()),
+            census: Some(crate::edges::EdgeCensus::new()),
             ..Collect::default()
         }
     }
@@ -95,7 +95,7 @@ impl Collect {
     }
 
     /// The mesh and, for a [`Collect::counting`] sink, its edges and bad
-    /// edges as [`crate::check::edges`] counts them (`None` where the
+    /// edges as [`crate::edges::edges`] counts them (`None` where the
     /// census could not tell: count them with that function).
     pub fn into_counted(mut self) -> (Mesh, Option<(usize, usize)>) {
         let edges = self.census.take().and_then(|c| c.finish());
@@ -180,7 +180,7 @@ pub struct Tally {
     /// Bounding box of the vertices (min, max).
     pub bbox: [[f64; 3]; 2],
     /// Edges and bad edges (not used exactly once each way), where an
-    /// [`crate::check::EdgeCensus`] counted them ([`Counting`]); `None`
+    /// [`crate::edges::EdgeCensus`] counted them ([`Counting`]); `None`
     /// where nothing counted or the mesh did not come in its order.
     pub edges: Option<(usize, usize)>,
 }
@@ -216,13 +216,13 @@ pub fn volume_area_of(t: [[f32; 3]; 3]) -> (f64, f64) {
 }
 
 /// A sink that counts the edges of what passes through to `inner`, in one
-/// streaming pass ([`crate::check::EdgeCensus`]): the bad-edge figure of a
+/// streaming pass ([`crate::edges::EdgeCensus`]): the bad-edge figure of a
 /// mesh that is never held whole.
 pub struct Counting<'a> {
     /// The sink everything is forwarded to, unchanged.
     pub inner: &'a mut (dyn MeshSink + Send),
     /// The census so far.
-    pub census: crate::check::EdgeCensus,
+    pub census: crate::edges::EdgeCensus,
 }
 
 impl MeshSink for Counting<'_> {

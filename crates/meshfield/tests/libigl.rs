@@ -29,7 +29,7 @@ fn root() -> PathBuf {
 /// The Python with libigl, or why there is none.
 fn python() -> Result<PathBuf, String> {
     let dir = root().join("target");
-    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+    microfrep_testsupport::pyvenv::python_with(&microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_LIBIGL_PYTHON",
         venv: &dir.join("libigl-venv"),
         check: "import igl, numpy",

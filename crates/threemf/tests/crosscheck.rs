@@ -22,7 +22,7 @@ fn root() -> PathBuf {
 /// needs); a requested check that cannot get it fails.
 fn python(module: &str) -> PathBuf {
     let dir = root().join("../../target");
-    microfrep_io::pyvenv::python_with(&microfrep_io::pyvenv::PythonSpec {
+    microfrep_testsupport::pyvenv::python_with(&microfrep_testsupport::pyvenv::PythonSpec {
         override_var: "MICROFREP_3MF_PYTHON",
         venv: &dir.join("3mf-venv"),
         check: "import xmlschema, lib3mf",

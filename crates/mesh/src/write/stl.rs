@@ -5,7 +5,7 @@
 //! measured and edge-counted while the mesh is made (`StlJob`).
 
 use super::{MeshFormat, CHUNK};
-use crate::check::EdgeCensus;
+use crate::edges::EdgeCensus;
 use crate::sink::{Counted, MeshSink, VertexWindow};
 use crate::{Mesh, MeshError};
 use microfrep_io::{AtomicFile, OutputFormat};
@@ -104,7 +104,7 @@ impl Encoder {
 /// its edges while it arrives, holding its vertices but not its triangles:
 /// those are kept until a few chunks have come, then encoded in parallel
 /// (so the file is on its way to the disk while the rest is meshed), and
-/// the edges are counted alongside ([`crate::check::EdgeCensus`]). The
+/// the edges are counted alongside ([`crate::edges::EdgeCensus`]). The
 /// bytes are those of [`super::write_mesh`]; [`StlJob::finish`] returns
 /// the counts, the volume and area measured while encoding (bit for bit
 /// those of `check::volume_area`), the bounding box and the edge census.
@@ -119,7 +119,7 @@ pub(crate) struct StlJob<'a> {
     counted: usize,
     census: EdgeCensus,
     /// Connected shells, as the triangles come.
-    shells: crate::check::ShellCensus,
+    shells: crate::edges::ShellCensus,
     triangles: u64,
     /// Bounding box of the vertices, in f32 (exact: the same as in f64).
     bbox: [[f32; 3]; 2],
@@ -139,7 +139,7 @@ impl<'a> StlJob<'a> {
             waiting: Vec::new(),
             counted: 0,
             census: EdgeCensus::new(),
-            shells: crate::check::ShellCensus::new(),
+            shells: crate::edges::ShellCensus::new(),
             triangles: 0,
             bbox: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
         })
@@ -208,7 +208,7 @@ pub(crate) struct StlJobSummary {
     pub(crate) measured: (f64, f64),
     pub(crate) bbox: [[f64; 3]; 2],
     /// Edges and bad edges; `None` when the mesh did not come in the order
-    /// the census relies on (count them with [`crate::check::edges`]).
+    /// the census relies on (count them with [`crate::edges::edges`]).
     pub(crate) edges: Option<(usize, usize)>,
     /// Connected shells (`None` if a triangle named an unknown vertex).
     pub(crate) shells: Option<usize>,

@@ -9,7 +9,7 @@
 
 use super::colour::{channel_tape, eval_at, scale_of, ColourBy};
 use super::{format_of, ply, StlWriter};
-use crate::check::EdgeCensus;
+use crate::edges::EdgeCensus;
 use crate::sink::{Counting, MeshSink, Tally, Tallying, VertexWindow};
 use crate::{MeshError, Plan};
 use microfrep_core::Tape;
