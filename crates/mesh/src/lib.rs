@@ -32,6 +32,7 @@ pub mod check;
 mod classify;
 pub mod correct;
 pub mod cubes;
+pub mod decimate;
 pub mod edges;
 mod grid;
 pub mod job;

@@ -17,9 +17,9 @@
 //! made at once, whatever the group size, and the same on every run.
 
 use crate::brick::{mesh_brick, BrickMesh, Finish, Scratch};
-use crate::check::BrickEdges;
 use crate::classify::BrickClass;
 use crate::correct::{add, apply_all, Acc};
+use crate::edges::BrickEdges;
 use crate::sink::{Counted, MeshSink, VertexWindow};
 use crate::{MeshError, Plan};
 use rayon::prelude::*;
