@@ -74,6 +74,8 @@ pub struct Collect {
     triangles: Vec<Vec<[u32; 3]>>,
     /// The edge census, when taken ([`Collect::counting`]).
     census: Option<crate::check::EdgeCensus>,
+    /// The shell census, when taken ([`Collect::counting_shells`]).
+    shells: Option<crate::check::ShellCensus>,
 }
 
 impl Collect {
@@ -84,6 +86,25 @@ impl Collect {
             census: Some(crate::check::EdgeCensus::new()),
             ..Collect::default()
         }
+    }
+
+    /// [`Collect::counting`] that also counts the connected shells as the
+    /// triangles come (as [`crate::check::shells`] counts them); see
+    /// [`Collect::into_counted_shells`].
+    pub fn counting_shells() -> Collect {
+        Collect {
+            shells: Some(crate::check::ShellCensus::new()),
+            ..Collect::counting()
+        }
+    }
+
+    /// [`Collect::into_counted`], with the shells of a
+    /// [`Collect::counting_shells`] sink (`None` where none were counted
+    /// or a triangle named an unknown vertex).
+    pub fn into_counted_shells(mut self) -> (Mesh, Option<(usize, usize)>, Option<usize>) {
+        let shells = self.shells.take().and_then(|c| c.finish());
+        let (mesh, edges) = self.into_counted();
+        (mesh, edges, shells)
     }
 
     /// The mesh received so far, in order.
@@ -130,6 +151,9 @@ impl MeshSink for Collect {
         if let Some(c) = &mut self.census {
             c.vertices(v.len());
         }
+        if let Some(c) = &mut self.shells {
+            c.vertices(v.len());
+        }
         if !v.is_empty() {
             self.vertices.push(v.to_vec());
         }
@@ -142,6 +166,9 @@ impl MeshSink for Collect {
 
     fn take_triangles(&mut self, t: Vec<[u32; 3]>, _: &VertexWindow) -> Result<(), MeshError> {
         if let Some(c) = &mut self.census {
+            c.triangles(&t);
+        }
+        if let Some(c) = &mut self.shells {
             c.triangles(&t);
         }
         if !t.is_empty() {
@@ -157,6 +184,9 @@ impl MeshSink for Collect {
     fn take_counted(&mut self, part: Counted, _: &VertexWindow) -> Result<(), MeshError> {
         if let Some(c) = &mut self.census {
             c.brick(&part.edges);
+        }
+        if let Some(c) = &mut self.shells {
+            c.triangles(&part.tris);
         }
         if !part.tris.is_empty() {
             self.triangles.push(part.tris);
