@@ -316,7 +316,7 @@ impl Plan {
     pub fn run_counted_shells(
         &self,
         progress: &(dyn Fn(usize) + Sync),
-    ) -> Result<(Mesh, Option<(usize, usize)>, Option<usize>), MeshError> {
+    ) -> Result<sink::CountedMesh, MeshError> {
         let mut c = sink::Collect::counting_shells();
         self.run_into(&mut c, progress)?;
         Ok(c.into_counted_shells())

@@ -63,6 +63,10 @@ pub struct Counted {
     pub edges: BrickEdges,
 }
 
+/// A mesh with its edges and bad edges and its connected shells, as
+/// counted while it was made (`None` where they could not be).
+pub type CountedMesh = (Mesh, Option<(usize, usize)>, Option<usize>);
+
 /// Collects the whole mesh in memory: the parts as they arrive (the
 /// triangles without a copy), joined once at the end by
 /// [`Collect::into_mesh`] into buffers of the exact size, several threads
@@ -101,7 +105,7 @@ impl Collect {
     /// [`Collect::into_counted`], with the shells of a
     /// [`Collect::counting_shells`] sink (`None` where none were counted
     /// or a triangle named an unknown vertex).
-    pub fn into_counted_shells(mut self) -> (Mesh, Option<(usize, usize)>, Option<usize>) {
+    pub fn into_counted_shells(mut self) -> CountedMesh {
         let shells = self.shells.take().and_then(|c| c.finish());
         let (mesh, edges) = self.into_counted();
         (mesh, edges, shells)
