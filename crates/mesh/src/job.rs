@@ -297,8 +297,8 @@ pub fn mesh_to_file(
         // meshing could not; dropped, the file is removed. (Run side by side under `rayon::join`, the
         // encoder's ordered writes waited behind stolen census work.) The
         // verdict needs the volume: STL measures it while encoding (the
-        // facet normals are the same products), other formats take a pass
-        // over the triangles.
+        // facet normals are the same products), PLY while encoding its
+        // faces, other formats take a pass over the triangles.
         let bbox = crate::check::bbox(&mesh);
         let measured = (!format.measures_volume()).then(|| crate::check::volume_area(&mesh));
         let (file, m) = write(

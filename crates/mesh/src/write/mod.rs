@@ -53,9 +53,9 @@ pub trait MeshFormat: OutputFormat {
     }
     /// [`MeshFormat::write`], also returning the mesh's volume and area
     /// ([`crate::check::volume_area`], the same values bit for bit) where
-    /// the format computes them anyway while encoding (STL's facet
-    /// normals), so a job saves a pass over the triangles; `None` where it
-    /// does not.
+    /// the format computes them while encoding (STL's facet normals; PLY
+    /// sums them as it encodes its faces), so a job saves a pass over the
+    /// triangles; `None` where it does not.
     fn write_measured(
         &self,
         mesh: &Mesh,
