@@ -55,29 +55,40 @@ fn p64(p: [f32; 3]) -> [f64; 3] {
 
 /// Volume and area of a mesh (divergence theorem; f64 sums in a fixed order).
 pub fn volume_area(mesh: &Mesh) -> (f64, f64) {
-    mesh.triangles
+    let sums = mesh
+        .triangles
         .par_chunks(crate::write::CHUNK)
-        .map(|ch| {
-            let (mut v, mut a) = (0.0, 0.0);
-            for t in ch {
-                let [p, q, r] = t.map(|i| p64(mesh.vertices[i as usize]));
-                let e1 = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
-                let e2 = [r[0] - p[0], r[1] - p[1], r[2] - p[2]];
-                let n = [
-                    e1[1] * e2[2] - e1[2] * e2[1],
-                    e1[2] * e2[0] - e1[0] * e2[2],
-                    e1[0] * e2[1] - e1[1] * e2[0],
-                ];
-                a += 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                v += (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0])
-                    + p[2] * (q[0] * r[1] - q[1] * r[0]))
-                    / 6.0;
-            }
-            (v, a)
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .fold((0.0, 0.0), |(v, a), (dv, da)| (v + dv, a + da))
+        .map(|ch| chunk_volume_area(&mesh.vertices, ch))
+        .collect::<Vec<_>>();
+    total_volume_area(&sums)
+}
+
+/// The volume and area sums of one chunk of [`volume_area`] (triangles
+/// `ts` of vertices `vs`), in its order.
+pub(crate) fn chunk_volume_area(vs: &[[f32; 3]], ts: &[[u32; 3]]) -> (f64, f64) {
+    let (mut v, mut a) = (0.0, 0.0);
+    for t in ts {
+        let [p, q, r] = t.map(|i| p64(vs[i as usize]));
+        let e1 = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+        let e2 = [r[0] - p[0], r[1] - p[1], r[2] - p[2]];
+        let n = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        a += 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        v += (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0])
+            + p[2] * (q[0] * r[1] - q[1] * r[0]))
+            / 6.0;
+    }
+    (v, a)
+}
+
+/// [`volume_area`] from the sums of its chunks ([`chunk_volume_area`] of
+/// each [`crate::write::CHUNK`] triangles), added in order.
+pub(crate) fn total_volume_area(sums: &[(f64, f64)]) -> (f64, f64) {
+    sums.iter()
+        .fold((0.0, 0.0), |(v, a), &(dv, da)| (v + dv, a + da))
 }
 
 /// What a mesher's summary reports: counts, bad edges, Euler

@@ -205,11 +205,13 @@ pub fn mesh_to_file(
     // to stream).
     let kept = kept.filter(|_| !job.stream);
     let stl_while_meshing = !stream && kept.is_none() && crate::write::is_stl(format);
+    // Meshed here in memory (or as STL): the volume is sampled alongside.
+    let meshed_here = !stream && kept.is_none();
     let mut sampled = match (&job.max_volume_loss, trials.last()) {
         (None, _) => None,
         (Some(_), Some(t)) if t.resolution == opts.resolution => Some(t.sampled),
         // Sampled alongside the meshing, below.
-        (Some(_), _) if stl_while_meshing => None,
+        (Some(_), _) if meshed_here => None,
         (Some(_), _) => Some(sampled_volume(&plan)),
     };
     let total = plan.surface_bricks();
@@ -269,11 +271,20 @@ pub fn mesh_to_file(
         s.shells = m.shells;
         s
     } else {
-        // Edges counted while meshing (from the bricks), except for a mesh
-        // the resolution search kept.
-        let (mesh, counted) = match kept {
-            Some(m) => (m, None),
-            None => plan.run_counted(&progress)?,
+        // Edges and shells counted while meshing (from the bricks), and the
+        // volume sampled alongside (as for STL), except for a mesh the
+        // resolution search kept.
+        let (mesh, counted, shells) = match kept {
+            Some(m) => (m, None, None),
+            None => {
+                let sample = job.max_volume_loss.is_some() && sampled.is_none();
+                let (meshed, v) = rayon::join(
+                    || plan.run_counted_shells(&progress),
+                    || sample.then(|| sampled_volume(&plan)),
+                );
+                sampled = sampled.or(v);
+                meshed?
+            }
         };
         let colours = match &job.colour {
             Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
@@ -286,8 +297,8 @@ pub fn mesh_to_file(
         // meshing could not; dropped, the file is removed. (Run side by side under `rayon::join`, the
         // encoder's ordered writes waited behind stolen census work.) The
         // verdict needs the volume: STL measures it while encoding (the
-        // facet normals are the same products), other formats take a pass
-        // over the triangles.
+        // facet normals are the same products), PLY while encoding its
+        // faces, other formats take a pass over the triangles.
         let bbox = crate::check::bbox(&mesh);
         let measured = (!format.measures_volume()).then(|| crate::check::volume_area(&mesh));
         let (file, m) = write(
@@ -313,7 +324,8 @@ pub fn mesh_to_file(
         let (committed, (edges, bad_edges), shells) = std::thread::scope(|sc| {
             let sync = sc.spawn(move || file.commit());
             let e = counted.unwrap_or_else(|| crate::check::edges(&mesh));
-            (sync.join(), e, crate::check::shells(&mesh))
+            let shells = shells.unwrap_or_else(|| crate::check::shells(&mesh));
+            (sync.join(), e, shells)
         });
         committed.map_err(|_| MeshError::Internal("the file sync thread panicked".into()))??;
         let euler = t.vertices as i64 - edges as i64 + t.triangles as i64;

@@ -312,6 +312,18 @@ impl Plan {
         Ok(c.into_counted())
     }
 
+    /// [`Self::run_counted`], with the connected shells counted while the
+    /// mesh is made too (as [`check::shells`] counts them; `None` where
+    /// that count could not be taken so).
+    pub fn run_counted_shells(
+        &self,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<sink::CountedMesh, MeshError> {
+        let mut c = sink::Collect::counting_shells();
+        self.run_into(&mut c, progress)?;
+        Ok(c.into_counted_shells())
+    }
+
     /// Meshes all surface bricks into `sink`, a few z-slabs of bricks at a
     /// time (so a sink that writes to disk keeps memory bounded); the
     /// output is the same as [`Self::run`]'s.

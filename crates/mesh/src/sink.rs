@@ -63,6 +63,10 @@ pub struct Counted {
     pub edges: BrickEdges,
 }
 
+/// A mesh with its edges and bad edges and its connected shells, as
+/// counted while it was made (`None` where they could not be).
+pub type CountedMesh = (Mesh, Option<(usize, usize)>, Option<usize>);
+
 /// Collects the whole mesh in memory: the parts as they arrive (the
 /// triangles without a copy), joined once at the end by
 /// [`Collect::into_mesh`] into buffers of the exact size, several threads
@@ -74,6 +78,8 @@ pub struct Collect {
     triangles: Vec<Vec<[u32; 3]>>,
     /// The edge census, when taken ([`Collect::counting`]).
     census: Option<crate::edges::EdgeCensus>,
+    /// The shell census, when taken ([`Collect::counting_shells`]).
+    shells: Option<crate::edges::ShellCensus>,
 }
 
 impl Collect {
@@ -84,6 +90,25 @@ impl Collect {
             census: Some(crate::edges::EdgeCensus::new()),
             ..Collect::default()
         }
+    }
+
+    /// [`Collect::counting`] that also counts the connected shells as the
+    /// triangles come (as [`crate::edges::shells`] counts them); see
+    /// [`Collect::into_counted_shells`].
+    pub fn counting_shells() -> Collect {
+        Collect {
+            shells: Some(crate::edges::ShellCensus::new()),
+            ..Collect::counting()
+        }
+    }
+
+    /// [`Collect::into_counted`], with the shells of a
+    /// [`Collect::counting_shells`] sink (`None` where none were counted
+    /// or a triangle named an unknown vertex).
+    pub fn into_counted_shells(mut self) -> CountedMesh {
+        let shells = self.shells.take().and_then(|c| c.finish());
+        let (mesh, edges) = self.into_counted();
+        (mesh, edges, shells)
     }
 
     /// The mesh received so far, in order.
@@ -130,6 +155,9 @@ impl MeshSink for Collect {
         if let Some(c) = &mut self.census {
             c.vertices(v.len());
         }
+        if let Some(c) = &mut self.shells {
+            c.vertices(v.len());
+        }
         if !v.is_empty() {
             self.vertices.push(v.to_vec());
         }
@@ -142,6 +170,9 @@ impl MeshSink for Collect {
 
     fn take_triangles(&mut self, t: Vec<[u32; 3]>, _: &VertexWindow) -> Result<(), MeshError> {
         if let Some(c) = &mut self.census {
+            c.triangles(&t);
+        }
+        if let Some(c) = &mut self.shells {
             c.triangles(&t);
         }
         if !t.is_empty() {
@@ -157,6 +188,9 @@ impl MeshSink for Collect {
     fn take_counted(&mut self, part: Counted, _: &VertexWindow) -> Result<(), MeshError> {
         if let Some(c) = &mut self.census {
             c.brick(&part.edges);
+        }
+        if let Some(c) = &mut self.shells {
+            c.triangles(&part.tris);
         }
         if !part.tris.is_empty() {
             self.triangles.push(part.tris);

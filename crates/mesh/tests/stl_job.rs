@@ -99,6 +99,43 @@ fn stl_jobs_write_the_bytes_and_figures_of_meshing_in_memory() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// A PLY job (meshed in memory, the volume sampled alongside, the shells
+/// counted and the volume measured while encoding) writes the bytes of
+/// `write_mesh` with the plan's normals and reports the figures of the
+/// checks, whatever the thread count.
+#[test]
+fn ply_jobs_write_the_bytes_and_figures_of_meshing_in_memory() {
+    let (shape, opts) = gyroid();
+    let d = dir("ply");
+    let reference = d.join("reference.ply");
+    let plan = Plan::new(&shape, &opts).unwrap();
+    let mesh = plan.run(&|_| {}).unwrap();
+    write_mesh(&reference, &mesh, Some(&plan.normals(&mesh))).unwrap();
+    let want = std::fs::read(&reference).unwrap();
+    let r = check(&mesh);
+    let (volume, area) = volume_area(&mesh);
+    let sampled = microfrep_mesh::sampled::sampled_volume(&plan);
+    for threads in [1, 2, 3] {
+        let out = d.join(format!("job{threads}.ply"));
+        let s = with_threads(threads, || {
+            mesh_to_file(&shape, &opts, &out, &JobOptions::default(), &|_, _| {}).unwrap()
+        });
+        assert!(std::fs::read(&out).unwrap() == want, "{threads} threads");
+        assert_eq!(
+            (s.vertices, s.triangles),
+            (r.vertices as u64, r.triangles as u64)
+        );
+        assert_eq!((s.bad_edges, s.euler), (Some(0), Some(r.euler)));
+        assert_eq!(s.volume.to_bits(), volume.to_bits());
+        assert_eq!(s.area.to_bits(), area.to_bits());
+        assert_eq!(s.bbox, bbox(&mesh));
+        assert_eq!(s.shells, Some(microfrep_mesh::check::shells(&mesh)));
+        assert_eq!(s.sampled_volume, Some(sampled), "{threads} threads");
+        assert!(!s.streamed && s.volume_loss.unwrap().abs() < 0.01, "{s:?}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 #[test]
 fn a_failed_stl_job_leaves_nothing_behind() {
     let (shape, opts) = gyroid();

@@ -53,9 +53,9 @@ pub trait MeshFormat: OutputFormat {
     }
     /// [`MeshFormat::write`], also returning the mesh's volume and area
     /// ([`crate::check::volume_area`], the same values bit for bit) where
-    /// the format computes them anyway while encoding (STL's facet
-    /// normals), so a job saves a pass over the triangles; `None` where it
-    /// does not.
+    /// the format computes them while encoding (STL's facet normals; PLY
+    /// sums them as it encodes its faces), so a job saves a pass over the
+    /// triangles; `None` where it does not.
     fn write_measured(
         &self,
         mesh: &Mesh,
@@ -198,22 +198,36 @@ pub(crate) fn write_encoded<T: Sync>(
     items: &[T],
     enc: impl Fn(&[T], &mut Vec<u8>) + Sync,
 ) -> std::io::Result<()> {
+    write_encoded_with(w, items, enc).map(|_| ())
+}
+
+/// [`write_encoded`], returning what `enc` gave for each chunk of
+/// [`CHUNK`] items, in order (the chunks of `items` from its start).
+pub(crate) fn write_encoded_with<T: Sync, R: Send>(
+    w: &mut impl Write,
+    items: &[T],
+    enc: impl Fn(&[T], &mut Vec<u8>) -> R + Sync,
+) -> std::io::Result<Vec<R>> {
     let per_group = 4 * rayon::current_num_threads().max(1);
     let mut bufs: Vec<Vec<u8>> = Vec::new();
+    let mut out = Vec::with_capacity(items.len().div_ceil(CHUNK));
     for g in items.chunks(CHUNK * per_group) {
         let n = g.len().div_ceil(CHUNK);
         if bufs.len() < n {
             bufs.resize_with(n, Vec::new);
         }
-        g.par_chunks(CHUNK)
+        let got: Vec<R> = g
+            .par_chunks(CHUNK)
             .zip(bufs[..n].par_iter_mut())
-            .for_each(|(c, b)| {
+            .map(|(c, b)| {
                 b.clear();
-                enc(c, b);
-            });
+                enc(c, b)
+            })
+            .collect();
+        out.extend(got);
         for b in &bufs[..n] {
             w.write_all(b)?;
         }
     }
-    Ok(())
+    Ok(out)
 }

@@ -1,7 +1,7 @@
 //! Binary little-endian PLY with optional vertex normals and vertex
 //! colours (`uchar red, green, blue`, after the normals).
 
-use super::{write_encoded, MeshFormat};
+use super::{write_encoded, write_encoded_with, MeshFormat};
 use crate::Mesh;
 use microfrep_io::{AtomicFile, OutputFormat};
 use std::io::Write;
@@ -34,24 +34,57 @@ impl MeshFormat for Ply {
         colours: Option<&[[u8; 3]]>,
         out: &mut AtomicFile,
     ) -> std::io::Result<()> {
-        let (nv, nf) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
-        let head = header(nv, nf, normals.is_some(), colours.is_some());
-        out.write_all(head.as_bytes())?;
-        let idx: Vec<usize> = (0..mesh.vertices.len()).collect();
-        write_encoded(out, &idx, |is, b| {
-            for &i in is {
-                vertex(b, mesh.vertices[i], normals.map(|ns| ns[i]));
-                if let Some(cs) = colours {
-                    b.extend_from_slice(&cs[i]);
-                }
-            }
-        })?;
-        write_encoded(out, &mesh.triangles, |ts, b| {
-            for t in ts {
-                face(b, *t);
-            }
-        })
+        write_ply(mesh, normals, colours, out, false).map(|_| ())
     }
+    fn measures_volume(&self) -> bool {
+        true
+    }
+    /// The volume and area are summed while the faces are encoded, chunk
+    /// by chunk as `check::volume_area` sums them (the same values).
+    fn write_measured(
+        &self,
+        mesh: &Mesh,
+        normals: Option<&[[f32; 3]]>,
+        colours: Option<&[[u8; 3]]>,
+        out: &mut AtomicFile,
+    ) -> std::io::Result<Option<(f64, f64)>> {
+        write_ply(mesh, normals, colours, out, true)
+    }
+}
+
+/// Writes the mesh; with `measure`, also its volume and area, summed while
+/// the faces are encoded.
+fn write_ply(
+    mesh: &Mesh,
+    normals: Option<&[[f32; 3]]>,
+    colours: Option<&[[u8; 3]]>,
+    out: &mut AtomicFile,
+    measure: bool,
+) -> std::io::Result<Option<(f64, f64)>> {
+    let (nv, nf) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
+    let head = header(nv, nf, normals.is_some(), colours.is_some());
+    out.write_all(head.as_bytes())?;
+    let base = mesh.vertices.as_ptr() as usize;
+    write_encoded(out, &mesh.vertices, |vs, b| {
+        // The index of the chunk's first vertex (chunks are subslices).
+        let first = (vs.as_ptr() as usize - base) / std::mem::size_of::<[f32; 3]>();
+        for (i, &p) in (first..).zip(vs) {
+            vertex(b, p, normals.map(|ns| ns[i]));
+            if let Some(cs) = colours {
+                b.extend_from_slice(&cs[i]);
+            }
+        }
+    })?;
+    let sums = write_encoded_with(out, &mesh.triangles, |ts, b| {
+        for t in ts {
+            face(b, *t);
+        }
+        measure.then(|| crate::check::chunk_volume_area(&mesh.vertices, ts))
+    })?;
+    Ok(measure.then(|| {
+        let sums: Vec<(f64, f64)> = sums.into_iter().flatten().collect();
+        crate::check::total_volume_area(&sums)
+    }))
 }
 
 /// The header for `nv` vertices (with normals, colours when asked) and
