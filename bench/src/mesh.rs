@@ -311,6 +311,17 @@ fn rotated_box(ours: &rayon::ThreadPool, theirs: &ThreadPool) -> Result<(), Stri
             .h;
         let (plain, plain_s) = run_ours(false)?;
         let (sharp, sharp_s) = run_ours(true)?;
+        // The sharp mesh with its flat regions merged at 0.05 cells.
+        let tape = Plan::new(
+            &microfrep_core::Shape::from(&e),
+            &MeshOptions::new([[-1.0; 3], [1.0; 3]], n),
+        )
+        .map_err(|e| e.to_string())?
+        .tape;
+        let mut merged = sharp.clone();
+        let t = Instant::now();
+        microfrep_mesh::decimate::decimate(&mut merged, &tape, h, 0.05 * h);
+        let merge_s = t.elapsed().as_secs_f64();
         let settings = fidget::mesh::Settings {
             depth,
             threads: Some(theirs),
@@ -331,9 +342,10 @@ fn rotated_box(ours: &rayon::ThreadPool, theirs: &ThreadPool) -> Result<(), Stri
         // fidget's cells: 2 / 2^depth.
         let fh = 2.0 / (1u32 << depth) as f64;
         println!(
-            "RESULT rotated_box_{n} sharp: {} s={sharp_s:.4} | plain: {} s={plain_s:.4} | \
-             fidget_depth_{depth}: {} s={:.4}",
+            "RESULT rotated_box_{n} sharp: {} s={sharp_s:.4} | sharp_tolerance_0.05: {} \
+             merge_s={merge_s:.4} | plain: {} s={plain_s:.4} | fidget_depth_{depth}: {} s={:.4}",
             figures(&sharp, h),
+            figures(&merged, h),
             figures(&plain, h),
             figures(&fm, fh),
             median(ts)

@@ -6,7 +6,7 @@ use crate::common::{check_terminates, frame, load_model, probe_terminates, Model
 use anyhow::{bail, Result};
 use clap::Args;
 use microfrep::export::{VolumeOptions, VolumeReport};
-use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions};
+use microfrep::mesh::job::{mesh_to_file, AutoOptions, JobOptions, Tolerance};
 use microfrep::mesh::report;
 use microfrep::mesh::write::colour::ColourBy;
 use microfrep::mesh::{CellMethod, Grid, MeshOptions};
@@ -51,6 +51,14 @@ pub struct MeshArgs {
     /// slower. With --cells cubes only.
     #[arg(long)]
     sharp: bool,
+    /// Merge flat regions and straight creases into fewer, larger
+    /// triangles while every triangle stays within this distance of the
+    /// surface, checked against the model at points no farther apart than
+    /// a cell: in cells (0.05), or in millimetres with a unit (0.01mm).
+    /// Off by default: curved lattices have nearly nothing flat to merge,
+    /// and the mesh must be held in memory. Best with --sharp (CAD parts).
+    #[arg(long, value_name = "T", value_parser = parse_tolerance, allow_hyphen_values = true)]
+    tolerance: Option<Tolerance>,
     /// Write a strut lattice model (mfStruts at the plain point, constant
     /// cell and radius, alone or `&` a part) to .3mf as triangles instead
     /// of a beam lattice (implied by --color-by and the volumetric options).
@@ -75,6 +83,19 @@ enum Cells {
 enum Resolution {
     Cells(usize),
     Auto,
+}
+
+fn parse_tolerance(s: &str) -> Result<Tolerance, String> {
+    let (num, unit) = match s.strip_suffix("mm") {
+        Some(n) => (n, Tolerance::Units as fn(f64) -> Tolerance),
+        None => (s, Tolerance::Cells as fn(f64) -> Tolerance),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(unit(v)),
+        _ => Err(format!(
+            "'{s}' is not a positive distance in cells (0.05) or millimetres (0.01mm)"
+        )),
+    }
 }
 
 fn parse_resolution(s: &str) -> Result<Resolution, String> {
@@ -164,6 +185,7 @@ pub fn run(a: MeshArgs) -> Result<()> {
             colormap,
             range,
         }),
+        tolerance: a.tolerance,
         ..JobOptions::default()
     };
     let s = mesh_to_file(&m.shape, &opts, &a.output, &job, &progress);

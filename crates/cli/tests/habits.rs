@@ -572,3 +572,85 @@ fn sharp_meshes_keep_a_cubes_faces_on_their_planes() {
     ]);
     assert!(code != 0 && err.contains("--sharp"), "{err}");
 }
+
+/// `mesh --sharp --tolerance` merges a cube's faces into a few triangles
+/// (12 at best; the merge stops where a collapse would not keep the
+/// mesh closed) with its box still at +-1, reports what it merged and how
+/// far from the surface it measured (in both units), and refuses a
+/// tolerance that is not a positive distance or a mesh it must stream.
+#[test]
+fn tolerance_merges_a_cubes_faces_and_reports_it() {
+    let d = dir("tolerance");
+    let m = d.join("cube.hf");
+    std::fs::write(
+        &m,
+        "my_model(x[3], a[1]) {\n  my_model = min(min(1 - abs(x[1]), 1 - abs(x[2])), 1 - abs(x[3]));\n}\n",
+    )
+    .unwrap();
+    let h = 2.4 / 25.0;
+    let mesh = |extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "mesh",
+            m.to_str().unwrap(),
+            "--bounds",
+            "-1.2,-1.2,-1.2,1.2,1.2,1.2",
+            "--resolution",
+            "25",
+            "--sharp",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let (o, _) = ok(&args);
+        let j: serde_json::Value = serde_json::from_str(o.trim()).unwrap();
+        (j, stl_box(out))
+    };
+    let (plain, _) = mesh(&[], &d.join("plain.stl"));
+    for (t, limit) in [("0.05", 0.05 * h), ("0.002mm", 0.002)] {
+        let (j, b) = mesh(&["--tolerance", t], &d.join("merged.stl"));
+        let merged = &j["merged"];
+        let after = j["triangles"].as_u64().unwrap();
+        assert_eq!(merged["triangles_before"], plain["triangles"], "{j}");
+        assert_eq!(merged["triangles_after"].as_u64(), Some(after), "{j}");
+        assert!(
+            after <= 100 && after * 20 < plain["triangles"].as_u64().unwrap(),
+            "{j}"
+        );
+        assert!(merged["deviation"].as_f64().unwrap() <= limit, "{j}");
+        assert_eq!(j["bad_edges"], 0, "{j}");
+        let off = (0..3)
+            .map(|a| (b[0][a] + 1.0).abs().max((b[1][a] - 1.0).abs()))
+            .fold(0.0, f64::max);
+        assert!(off < 0.02 * h, "{b:?}");
+        let v = j["volume"].as_f64().unwrap();
+        assert!((v - 8.0).abs() < 1e-4, "{j}");
+    }
+    for bad in ["0", "-1", "x", "nanmm"] {
+        let (code, _, err) = run(&[
+            "mesh",
+            m.to_str().unwrap(),
+            "--tolerance",
+            bad,
+            "-o",
+            d.join("bad.stl").to_str().unwrap(),
+        ]);
+        assert!(
+            code != 0 && err.contains("positive distance"),
+            "{bad}: {err}"
+        );
+    }
+    let (code, _, err) = run(&[
+        "mesh",
+        m.to_str().unwrap(),
+        "--resolution",
+        "25",
+        "--tolerance",
+        "0.05",
+        "--stream",
+        "-o",
+        d.join("s.stl").to_str().unwrap(),
+    ]);
+    assert!(code != 0 && err.contains("in memory"), "{err}");
+    assert!(!d.join("s.stl").exists());
+}

@@ -10,7 +10,7 @@
 //! - the mesh stays a closed 2-manifold: `u` and `v` share exactly the two
 //!   neighbours of the triangles on their edge (the link condition);
 //! - every changed triangle keeps a proper area and turns by less than
-//!   [`TURN_DEGREES`];
+//!   20 degrees;
 //! - `u` lies within the tolerance of the changed triangles, and so does
 //!   the zero set of the field at sample points spread over each of them
 //!   (no farther apart than a cell), by `|f| / |grad f|` in f64.
@@ -312,16 +312,23 @@ impl Decimator {
     /// largest distance found.
     fn within_tolerance(&mut self, u: u32, v: u32, fan: &[u32]) -> bool {
         let p = self.pos[u as usize];
-        let mut nearest = f64::INFINITY;
+        let changed: Vec<[[f64; 3]; 3]> = fan
+            .iter()
+            .map(|&t| self.tris[t as usize])
+            .filter(|tri| !tri.contains(&v))
+            .map(|tri| tri.map(|w| self.pos[if w == u { v } else { w } as usize]))
+            .collect();
+        // The removed vertex first (no field evaluations).
+        let nearest = changed
+            .iter()
+            .map(|&[a, b, c]| crate::measure::point_triangle(p, a, b, c))
+            .fold(f64::INFINITY, f64::min);
+        if !(nearest <= self.tol) {
+            return false;
+        }
         let mut worst: f64 = 0.0;
         let mut samples = 0;
-        for &t in fan {
-            let tri = self.tris[t as usize];
-            if tri.contains(&v) {
-                continue;
-            }
-            let [a, b, c] = tri.map(|w| self.pos[if w == u { v } else { w } as usize]);
-            nearest = nearest.min(crate::measure::point_triangle(p, a, b, c));
+        for &[a, b, c] in &changed {
             let longest = [sub(b, a), sub(c, b), sub(a, c)]
                 .iter()
                 .map(|e| dot(*e, *e).sqrt())
@@ -349,9 +356,6 @@ impl Decimator {
             }
         }
         self.samples += samples;
-        if !(nearest <= self.tol) {
-            return false;
-        }
         self.deviation = self.deviation.max(worst).max(nearest);
         true
     }

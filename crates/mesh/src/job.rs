@@ -51,6 +51,38 @@ pub struct JobOptions {
     /// Colour the vertices by an attribute channel (formats that store
     /// colours only: PLY, OBJ, 3MF; streamed PLY too).
     pub colour: Option<ColourBy>,
+    /// Merge flat regions and straight creases ([`crate::decimate`]) while
+    /// the mesh stays this close to the surface. Default `None`: the
+    /// merge finds next to nothing on the curved surfaces of lattices,
+    /// where it would cost a pass over the whole mesh, and it needs the
+    /// mesh in memory (no streaming).
+    pub tolerance: Option<Tolerance>,
+}
+
+/// How far a merged region may lie from the surface ([`JobOptions::tolerance`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tolerance {
+    /// In cells of the grid.
+    Cells(f64),
+    /// In model units (millimetres).
+    Units(f64),
+}
+
+impl Tolerance {
+    /// The tolerance in model units on a grid of cell size `h`.
+    pub fn in_units(self, h: f64) -> f64 {
+        match self {
+            Tolerance::Cells(c) => c * h,
+            Tolerance::Units(u) => u,
+        }
+    }
+
+    /// The amount, whichever unit it is in.
+    pub fn value(self) -> f64 {
+        match self {
+            Tolerance::Cells(v) | Tolerance::Units(v) => v,
+        }
+    }
 }
 
 impl Default for JobOptions {
@@ -61,6 +93,7 @@ impl Default for JobOptions {
             max_volume_loss: Some(0.05),
             auto: None,
             colour: None,
+            tolerance: None,
         }
     }
 }
@@ -153,6 +186,8 @@ pub struct Summary {
     /// [`JobOptions::colour`]): its range is the one asked for or the
     /// attribute's over the vertices.
     pub colour_scale: Option<ColourScale>,
+    /// What merging flat regions did (with [`JobOptions::tolerance`]).
+    pub decimation: Option<crate::decimate::Decimation>,
 }
 
 /// Meshes `shape` with `opts` into `out` (format by extension);
@@ -166,6 +201,21 @@ pub fn mesh_to_file(
 ) -> Result<Summary, MeshError> {
     let format = format_of(out)?;
     microfrep_io::atomic::check_not_input(out)?;
+    if let Some(t) = job.tolerance {
+        if !(t.value() > 0.0 && t.value().is_finite()) {
+            return Err(MeshError::Input(format!(
+                "tolerance {}: give a positive distance",
+                t.value()
+            )));
+        }
+        if job.stream {
+            return Err(MeshError::Input(
+                "merging flat regions (a tolerance) needs the mesh in memory: drop the \
+                 streaming, or the tolerance"
+                    .into(),
+            ));
+        }
+    }
     if let Some(by) = &job.colour {
         // Refused before any meshing: no colours in the format, no such
         // channel, a bad range.
@@ -191,6 +241,14 @@ pub fn mesh_to_file(
     }
     let too_big = |bytes: f64| avail.is_some_and(|m| bytes > m);
     let stream = format.streams() && (job.stream || too_big(est.bytes));
+    if stream && job.tolerance.is_some() {
+        return Err(MeshError::TooLarge(format!(
+            "merging flat regions (a tolerance) needs the mesh in memory, about {:.1} GiB, \
+             but {:.1} GiB are available; lower the resolution or drop the tolerance",
+            est.bytes / GIB,
+            avail.unwrap_or(0.0) / GIB
+        )));
+    }
     let predicted = if stream {
         memory::streaming_bytes_grid(&grid, &est)
     } else {
@@ -204,7 +262,9 @@ pub fn mesh_to_file(
     // A mesh the resolution search kept is written as it is (unless asked
     // to stream).
     let kept = kept.filter(|_| !job.stream);
-    let stl_while_meshing = !stream && kept.is_none() && crate::write::is_stl(format);
+    // (A mesh to merge is held whole first.)
+    let stl_while_meshing =
+        !stream && kept.is_none() && job.tolerance.is_none() && crate::write::is_stl(format);
     // Meshed here in memory (or as STL): the volume is sampled alongside.
     let meshed_here = !stream && kept.is_none();
     let mut sampled = match (&job.max_volume_loss, trials.last()) {
@@ -220,6 +280,7 @@ pub fn mesh_to_file(
     let verdict =
         |t: &Tally, sampled: Option<&SampledVolume>| verdict(shape, &plan, &opts, job, sampled, t);
     let colour_scale;
+    let mut decimation = None;
     let mut s = if stream {
         let colour = job.colour.as_ref().map(|c| (shape, c));
         let normals = format.wants_normals();
@@ -274,7 +335,7 @@ pub fn mesh_to_file(
         // Edges and shells counted while meshing (from the bricks), and the
         // volume sampled alongside (as for STL), except for a mesh the
         // resolution search kept.
-        let (mesh, counted, shells) = match kept {
+        let (mut mesh, mut counted, mut shells) = match kept {
             Some(m) => (m, None, None),
             None => {
                 let sample = job.max_volume_loss.is_some() && sampled.is_none();
@@ -286,6 +347,16 @@ pub fn mesh_to_file(
                 meshed?
             }
         };
+        if let Some(t) = job.tolerance {
+            let h = plan.grid.h;
+            let d = crate::decimate::decimate(&mut mesh, &plan.tape, h, t.in_units(h));
+            if d.removed > 0 {
+                // Counted again on what is written.
+                counted = None;
+                shells = None;
+            }
+            decimation = Some(d);
+        }
         let colours = match &job.colour {
             Some(by) => Some(vertex_colours(shape, by, &mesh.vertices)?),
             None => None,
@@ -339,6 +410,7 @@ pub fn mesh_to_file(
     s.volume_loss = sampled.and_then(|v| loss(v.value, s.volume));
     s.trials = trials;
     s.colour_scale = colour_scale;
+    s.decimation = decimation;
     Ok(s)
 }
 
@@ -390,6 +462,7 @@ fn summary_of(
         volume_loss: None,
         trials: Vec::new(),
         colour_scale: None,
+        decimation: None,
     }
 }
 

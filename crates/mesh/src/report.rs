@@ -40,6 +40,14 @@ pub fn to_json(s: &Summary, output: &str, seconds: f64, peak_bytes: f64) -> Valu
         "runtime_errors": s.runtime_errors.as_ref().map(|c| c.errors),
         "sampled_volume": s.sampled_volume.map(|v| json!({ "value": v.value, "error": v.error })),
         "volume_loss": s.volume_loss,
+        "merged": s.decimation.map(|d| json!({
+            "triangles_before": d.triangles.0,
+            "triangles_after": d.triangles.1,
+            "vertices_removed": d.removed,
+            "deviation": d.deviation,
+            "deviation_cells": d.deviation / s.cell,
+            "points_checked": d.samples,
+        })),
         "auto": s.trials.iter().map(|t| json!({
             "resolution": t.resolution,
             "mesh_volume": t.mesh_volume,
@@ -69,6 +77,16 @@ pub fn to_text(s: &Summary, output: &str, seconds: f64, peak_bytes: f64) -> Stri
         line!("  auto       tried {} cells", t.join(", "));
     }
     line!("  triangles  {}", s.triangles);
+    if let Some(d) = s.decimation {
+        line!(
+            "  merged     flat regions: {} -> {} triangles, within {} cells of the \
+             surface ({} points checked against the field)",
+            d.triangles.0,
+            d.triangles.1,
+            sig(d.deviation / s.cell, 2),
+            d.samples
+        );
+    }
     line!("  vertices   {}", s.vertices);
     match (s.bad_edges, s.euler) {
         (Some(b), Some(e)) => line!("  bad edges  {b} (euler {e})"),
