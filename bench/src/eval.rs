@@ -64,13 +64,20 @@ pub fn run() -> Result<(), String> {
                 .fold(0.0f32, f32::max)
         };
         let [m, v, j] = best.map(|secs| x.len() as f64 / secs / 1e6);
+        // The divider floor: the square roots and divisions the tape does
+        // per point, alone, in blocks of 256 (the divider unit runs one
+        // 8-lane op every few cycles, whatever else the tape does).
+        let (roots, divs) = divider_ops(&tape);
+        let floor = x.len() as f64 / floor_secs(x, roots, divs) / 1e6;
         println!(
             "RESULT {name} microfrep={m:.2} fidget_vm={v:.2} fidget_jit={j:.2} ratio={:.2} \
-             points={} tape_len={} max_abs_diff_vm={:.2e} max_abs_diff_jit={:.2e} \
+             points={} tape_len={} sqrt={roots} div={divs} divider_floor={floor:.2} \
+             floor_over_jit={:.2} max_abs_diff_vm={:.2e} max_abs_diff_jit={:.2e} \
              fidget_chunks={}/{}",
             m / v.max(j),
             x.len(),
             tape.len(),
+            floor / j,
             diff(&outs[1]),
             diff(&outs[2]),
             chunks[1],
@@ -78,6 +85,58 @@ pub fn run() -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// Square roots and divisions per point of the tape: `sqrt`, `/`, and the
+/// R-function set operations (a root each, and a division where alpha is
+/// not zero).
+fn divider_ops(tape: &Tape) -> (usize, usize) {
+    use microfrep_core::{BinaryOp, Op, UnaryOp};
+    let constant = |v: microfrep_core::ValueId| match tape.ops()[v as usize] {
+        Op::Const(c) => Some(c),
+        _ => None,
+    };
+    let (mut roots, mut divs) = (0, 0);
+    for op in tape.ops() {
+        match *op {
+            Op::Unary(UnaryOp::Sqrt, _) => roots += 1,
+            Op::Binary(BinaryOp::Div, ..) => divs += 1,
+            Op::Set { alpha, .. } => {
+                roots += 1;
+                if constant(alpha) != Some(0.0) {
+                    divs += 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    (roots, divs)
+}
+
+/// Seconds (best of `REPS`) of `roots` square roots and `divs` divisions
+/// per point of `x`, in blocks of 256.
+fn floor_secs(x: &[f32], roots: usize, divs: usize) -> f64 {
+    let mut acc = vec![0.0f32; 256];
+    let mut best = f64::INFINITY;
+    for _ in 0..REPS {
+        let t = Instant::now();
+        for xs in x.chunks(256) {
+            // Lanes innermost, as the evaluator's loops, so they vectorise.
+            for k in 0..roots {
+                for (a, &xi) in acc.iter_mut().zip(xs) {
+                    *a += (xi.abs() + k as f32).sqrt();
+                }
+            }
+            for k in 0..divs {
+                for (a, &xi) in acc.iter_mut().zip(xs) {
+                    *a += xi / (0.2 + k as f32);
+                }
+            }
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    std::hint::black_box(&acc);
+    best
 }
 
 /// Cell-centred grid of n^3 points in [-1, 1]^3, x fastest.
