@@ -7,7 +7,7 @@ use microfrep::analysis::{analyze as run_analyze, AnalyzeOptions, Grid};
 use microfrep::fab::stack::StackFormat;
 use microfrep::fab::{write_stack, Format, SliceGrid};
 use microfrep::io::{AtomicDir, AtomicFile};
-use microfrep::mesh::job::{mesh_to_file, JobOptions};
+use microfrep::mesh::job::{mesh_to_file, JobOptions, Tolerance};
 use microfrep::mesh::{CellMethod, MeshOptions, Plan};
 use microfrep::render::{cutaway, ray_cast, section, Camera, Plane, RgbImage, View};
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods};
@@ -105,8 +105,11 @@ impl PyShape {
     }
 
     /// Meshes into a file (format by extension: .stl .obj .ply .3mf), as
-    /// `microfrep mesh`; returns the summary as JSON text.
-    #[pyo3(signature = (path, resolution=256, bounds=None, cells="cubes", stream=false))]
+    /// `microfrep mesh`; returns the summary as JSON text, the keys of
+    /// `microfrep mesh --json`. `tolerance` (cells) or `tolerance_mm`
+    /// merges flat regions as `--tolerance` does.
+    #[pyo3(signature = (path, resolution=256, bounds=None, cells="cubes", stream=false, sharp=false, tolerance=None, tolerance_mm=None))]
+    #[allow(clippy::too_many_arguments)]
     fn mesh_to_file(
         &self,
         py: Python<'_>,
@@ -115,38 +118,47 @@ impl PyShape {
         bounds: Option<Box3>,
         cells: &str,
         stream: bool,
+        sharp: bool,
+        tolerance: Option<f64>,
+        tolerance_mm: Option<f64>,
     ) -> PyResult<String> {
         let start = std::time::Instant::now();
         microfrep::mesh::write::format_of(&path).map_err(errors::mesh)?;
         let b = self.frame(py, bounds)?;
         let mut opts = MeshOptions::new(b.corners(), resolution);
         opts.cells = self::cells(cells)?;
+        if sharp && opts.cells != CellMethod::Cubes {
+            return Err(errors::input(
+                "sharp features are placed in marching cubes: use cells='cubes'",
+            ));
+        }
+        opts.sharp = sharp;
+        let tolerance = match (tolerance, tolerance_mm) {
+            (Some(_), Some(_)) => {
+                return Err(errors::input(
+                    "give tolerance (cells) or tolerance_mm, not both",
+                ))
+            }
+            (Some(c), None) => Some(Tolerance::Cells(c)),
+            (None, Some(u)) => Some(Tolerance::Units(u)),
+            (None, None) => None,
+        };
         let job = JobOptions {
             stream,
+            tolerance,
             ..JobOptions::default()
         };
         let shape = self.s.clone();
         let s = py
             .allow_threads(|| mesh_to_file(&shape, &opts, &path, &job, &|_, _| {}))
             .map_err(errors::mesh)?;
-        let j = serde_json::json!({
-            "output": path.display().to_string(),
-            "resolution": s.resolution,
-            "cells": cells,
-            "cell": s.cell,
-            "triangles": s.triangles,
-            "vertices": s.vertices,
-            "bad_edges": s.bad_edges,
-            "euler": s.euler,
-            "streamed": s.streamed,
-            "volume": s.volume,
-            "area": s.area,
-            "bbox": s.bbox,
-            "seconds": start.elapsed().as_secs_f64(),
-            "predicted_peak_bytes": s.predicted_bytes,
-            "thin_cells": s.thin_cells,
-            "runtime_errors": s.runtime_errors.as_ref().map(|c| c.errors),
-        });
+        let peak = microfrep::io::limits::peak_rss().unwrap_or(f64::NAN);
+        let j = microfrep::mesh::report::to_json(
+            &s,
+            &path.display().to_string(),
+            start.elapsed().as_secs_f64(),
+            peak,
+        );
         Ok(j.to_string())
     }
 

@@ -30,14 +30,39 @@ def test_mesh_of_a_ball_is_closed_and_has_its_volume():
 def test_mesh_to_file_reports_like_the_cli(tmp_path):
     s = mf.load("toriball")
     out = tmp_path / "t.stl"
-    # 96 is the coarsest resolution the volume check accepts for the
-    # tori-ball block (at 64 its thin bars vanish and the job is refused).
-    r = s.mesh_to_file(out, resolution=96)
+    # 128 passes the volume check for the tori-ball block (at 96 its thin
+    # bars lose 7 % of the volume, and the job is refused).
+    r = s.mesh_to_file(out, resolution=128)
     assert out.stat().st_size == 84 + 50 * r["triangles"]
-    assert r["bad_edges"] == 0 and r["resolution"] == 96
-    v, f = s.mesh(resolution=96)
+    assert r["bad_edges"] == 0 and r["resolution"] == 128
+    v, f = s.mesh(resolution=128)
     assert len(f) == r["triangles"]
     assert abs(mesh_volume(v, f) - r["volume"]) < 1e-6 * abs(r["volume"])
+    # The keys of `microfrep mesh --json`, the volume check's among them.
+    for k in ("sampled_volume", "volume_loss", "auto", "peak_bytes", "merged"):
+        assert k in r, k
+    assert r["merged"] is None and 0 <= r["volume_loss"] < 0.05
+
+
+def test_sharp_and_tolerance_merge_a_cubes_faces(tmp_path):
+    cube = mf.box((-1, -1, -1), (1, 1, 1))
+    out = tmp_path / "c.stl"
+    bounds = ((-1.2, -1.2, -1.2), (1.2, 1.2, 1.2))
+    plain = cube.mesh_to_file(out, resolution=25, bounds=bounds, sharp=True)
+    r = cube.mesh_to_file(out, resolution=25, bounds=bounds, sharp=True, tolerance=0.05)
+    m = r["merged"]
+    assert m["triangles_before"] == plain["triangles"] and m["triangles_after"] == r["triangles"]
+    assert r["triangles"] * 20 < plain["triangles"] and r["bad_edges"] == 0
+    assert m["deviation_cells"] <= 0.05 and abs(r["volume"] - 8) < 1e-4
+    assert out.stat().st_size == 84 + 50 * r["triangles"]
+    r = cube.mesh_to_file(out, resolution=25, bounds=bounds, sharp=True, tolerance_mm=0.001)
+    assert r["merged"]["deviation"] <= 0.001
+    with pytest.raises(mf.InputError, match="not both"):
+        cube.mesh_to_file(out, resolution=25, bounds=bounds, tolerance=0.05, tolerance_mm=0.01)
+    with pytest.raises(mf.InputError, match="cubes"):
+        cube.mesh_to_file(out, resolution=25, bounds=bounds, cells="tets", sharp=True)
+    with pytest.raises(mf.InputError, match="positive distance"):
+        cube.mesh_to_file(out, resolution=25, bounds=bounds, tolerance=-1)
 
 
 def test_slices_cover_the_ball_section_areas(tmp_path):

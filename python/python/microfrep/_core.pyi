@@ -45,7 +45,15 @@ class Shape:
         self, resolution: int = 256, bounds: Optional[Box3] = None, cells: str = "cubes"
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]: ...
     def mesh_to_file(
-        self, path: str, resolution: int = 256, bounds: Optional[Box3] = None, cells: str = "cubes", stream: bool = False
+        self,
+        path: str,
+        resolution: int = 256,
+        bounds: Optional[Box3] = None,
+        cells: str = "cubes",
+        stream: bool = False,
+        sharp: bool = False,
+        tolerance: Optional[float] = None,
+        tolerance_mm: Optional[float] = None,
     ) -> str: ...
     def slice_grid(self, layer: float, pixel: float, bounds: Optional[Box3] = None) -> Tuple[int, int, int, Vec3, Vec3]: ...
     def slice_array(

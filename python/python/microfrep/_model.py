@@ -418,11 +418,26 @@ class Shape:
         bounds: Optional[Box] = None,
         cells: str = "cubes",
         stream: bool = False,
+        sharp: bool = False,
+        tolerance: Optional[float] = None,
+        tolerance_mm: Optional[float] = None,
     ) -> dict:
         """Meshes into ``path`` (.stl .obj .ply .3mf) as ``microfrep mesh``
         does (streamed to disk when the mesh would not fit in memory, or
-        with ``stream``); returns the summary of ``microfrep mesh --json``."""
-        s = self._s.mesh_to_file(os.fspath(path), int(resolution), _box(bounds), cells, stream)
+        with ``stream``); returns the summary of ``microfrep mesh --json``
+        (the same keys). ``sharp`` keeps creases and corners; ``tolerance``
+        (in cells) or ``tolerance_mm`` merges flat regions within that
+        distance of the surface, as ``--sharp`` and ``--tolerance`` do."""
+        s = self._s.mesh_to_file(
+            os.fspath(path),
+            int(resolution),
+            _box(bounds),
+            cells,
+            stream,
+            bool(sharp),
+            None if tolerance is None else float(tolerance),
+            None if tolerance_mm is None else float(tolerance_mm),
+        )
         return json.loads(s)
 
     def slice(self, layer: float, pixel: float, bounds: Optional[Box] = None, aa: bool = False) -> np.ndarray:
