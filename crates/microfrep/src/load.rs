@@ -1294,3 +1294,52 @@ mod tests {
         assert!(e.to_string().contains("HyperFun"), "{e}");
     }
 }
+
+/// What [`check_source`] found in a HyperFun text: the evaluated object as
+/// a model, when it lowers, and every diagnostic of the whole file.
+#[derive(Debug)]
+pub struct SourceCheck {
+    /// The evaluated object, lowered with its parameters and fields;
+    /// `None` when it has errors (errors in other objects do not stop it).
+    pub model: Option<microfrep_hyperfun::Model>,
+    /// Errors and warnings with positions, in source order (those of
+    /// `microfrep check`, the warnings on calls whose reference result is
+    /// a quirk included).
+    pub diagnostics: microfrep_hyperfun::Diagnostics,
+    /// Errors without a position (no such object, a parameter out of
+    /// range).
+    pub unlocated: Vec<String>,
+    /// All of them as `microfrep check` prints them: `file:line:col:
+    /// severity: message`, the source line and a caret, then the
+    /// unlocated ones as `file: error: message`.
+    pub rendered: String,
+}
+
+/// Checks the HyperFun text `src` (named `file` in messages) as `microfrep
+/// check` does, every object lowered on its own, and lowers the evaluated
+/// object (`object`, default `my_model`, else the first) with the
+/// parameters and the already built data `fields` that `opts` names: the
+/// editor's view of a model (the studio's), where a load stops at the
+/// first error.
+pub fn check_source(src: &str, file: &str, opts: &microfrep_hyperfun::LoadOptions) -> SourceCheck {
+    microfrep_structures_hf::install();
+    let (diagnostics, unlocated, parsed) =
+        match microfrep_hyperfun::check::check_with(src, file, opts) {
+            Ok(r) => (r.diagnostics, r.unlocated, true),
+            Err(parse) => (parse, Vec::new(), false),
+        };
+    // Errors of other objects do not stop the evaluated one.
+    let model = parsed
+        .then(|| microfrep_hyperfun::load_with_options(src, file, opts).ok())
+        .flatten();
+    let mut rendered = diagnostics.render(src);
+    for m in &unlocated {
+        rendered += &format!("{file}: error: {m}\n");
+    }
+    SourceCheck {
+        model,
+        diagnostics,
+        unlocated,
+        rendered,
+    }
+}

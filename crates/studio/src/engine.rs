@@ -11,14 +11,14 @@
 use microfrep_analysis::AnalyzeOptions;
 use microfrep_core::shape::BoundsOptions;
 use microfrep_core::{BatchEval, Field, Interval, PointEval, Shape};
-use microfrep_hyperfun::{lower, Diagnostic, Diagnostics, Severity};
+use microfrep_hyperfun::{Diagnostic, Severity};
 use microfrep_mesh::{memory, MeshOptions, Plan};
 use rayon::prelude::*;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::Path;
-use std::sync::{Arc, Once};
+use std::sync::Arc;
 
 /// Why an engine call failed: a message for the page.
 #[derive(Debug, thiserror::Error)]
@@ -96,13 +96,6 @@ pub struct LoadResult {
     pub rendered: String,
 }
 
-static INSTALL: Once = Once::new();
-
-/// Installs the `mf*` library into HyperFun (once per process).
-pub fn install() {
-    INSTALL.call_once(microfrep_structures_hf::install);
-}
-
 fn diag_of(d: &Diagnostic) -> Diag {
     Diag {
         error: d.severity == Severity::Error,
@@ -112,11 +105,12 @@ fn diag_of(d: &Diagnostic) -> Diag {
     }
 }
 
-/// Parses and lowers object `object` (default `my_model`, else the first)
+/// Checks and lowers object `object` (default `my_model`, else the first)
 /// of `src` with `a[1..] = params` and the data `fields` callable as
-/// `NAME(x)`; the other objects are lowered too, as `microfrep check` does,
-/// so their errors are reported (the model is still returned when only
-/// those fail).
+/// `NAME(x)`, through the facade's [`microfrep::load::check_source`]: the
+/// diagnostics of `microfrep check` (every object lowered, so errors
+/// anywhere are found), and the model, still returned when only other
+/// objects fail.
 pub fn load(
     src: &str,
     file: &str,
@@ -124,69 +118,24 @@ pub fn load(
     params: &[f64],
     fields: &[(String, Arc<dyn Field>)],
 ) -> LoadResult {
-    install();
-    let options = microfrep_hyperfun::Options::default();
-    let mut registry = microfrep_hyperfun::library::Registry::standard();
-    for (name, f) in fields {
-        registry.register_field(name, f.clone());
-    }
-    let parsed = microfrep_hyperfun::parse_with_registry(src, file, options, &registry);
-    let (program, mut items) = match parsed {
-        Ok((p, warnings)) => (Arc::new(p), warnings.items),
-        Err(d) => {
-            return LoadResult {
-                model: None,
-                diags: d.items.iter().map(diag_of).collect(),
-                rendered: d.render(src),
-            }
-        }
+    let opts = microfrep_hyperfun::LoadOptions {
+        object: object.map(str::to_string),
+        params: params
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| (k + 1, v))
+            .collect(),
+        fields: fields.to_vec(),
     };
-    let mut unlocated = Vec::new();
-    let chosen = lower::select_object(&program, object);
-    let mut model = None;
-    for i in 0..program.objects.len() {
-        let p = if Some(i) == chosen { params } else { &[] };
-        match lower::lower(program.clone(), i, &registry, p) {
-            Ok(m) if Some(i) == chosen => model = Some(m),
-            Ok(_) => {}
-            Err(e) if e.pos.line == 0 => unlocated.push(format!(
-                "object '{}': {}",
-                program.objects[i].name, e.message
-            )),
-            Err(e) => items.push(Diagnostic {
-                severity: Severity::Error,
-                pos: e.pos,
-                message: e.message,
-            }),
-        }
-    }
-    if chosen.is_none() {
-        unlocated.push(match object {
-            Some(n) => format!("no object named '{n}'"),
-            None => "the file defines no object".into(),
-        });
-    }
-    items.sort_by_key(|d| d.pos);
-    items.dedup();
-    let report = Diagnostics {
-        file: file.to_string(),
-        items,
-        ..Default::default()
-    };
-    let mut rendered = report.render(src);
-    let mut diags: Vec<Diag> = report.items.iter().map(diag_of).collect();
-    for m in unlocated {
-        rendered += &format!("{file}: error: {m}\n");
-        diags.push(Diag {
-            error: true,
-            line: 0,
-            col: 0,
-            message: m,
-        });
-    }
-    // Errors in other objects are reported, but do not stop the preview of
-    // the evaluated one.
-    let model = model.map(|m| {
+    let c = microfrep::load::check_source(src, file, &opts);
+    let mut diags: Vec<Diag> = c.diagnostics.items.iter().map(diag_of).collect();
+    diags.extend(c.unlocated.iter().map(|m| Diag {
+        error: true,
+        line: 0,
+        col: 0,
+        message: m.clone(),
+    }));
+    let model = c.model.map(|m| {
         let shape = m.shape();
         Loaded {
             attributes: shape.attributes().iter().map(|a| a.name.clone()).collect(),
@@ -200,7 +149,7 @@ pub fn load(
     LoadResult {
         model,
         diags,
-        rendered,
+        rendered: c.rendered,
     }
 }
 

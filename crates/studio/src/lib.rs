@@ -151,7 +151,6 @@ pub struct Studio {
 impl Studio {
     /// Starts listening and serving on a background thread.
     pub fn start(opts: ServeOptions) -> Result<Studio, StudioError> {
-        engine::install();
         let token = match &opts.token {
             Some(t) => {
                 auth::check_token(t)?;
