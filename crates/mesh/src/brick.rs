@@ -505,7 +505,7 @@ fn features(
     table: &CellTable,
     s: &mut Scratch,
 ) -> (Vec<[f32; 3]>, Vec<u32>, Vec<Rim>) {
-    use std::collections::HashMap;
+    use crate::fasthash::{FastMap, FastSet};
     let cycles = crate::cubes::cycle_table();
     let h = grid.h;
     let np = s.pos.len();
@@ -531,12 +531,9 @@ fn features(
     let mut pass: Vec<usize> = (0..s.cells.len()).filter(|&c| s.spread[c]).collect();
     for round in 0..2 {
         if round == 1 {
-            let index: HashMap<u32, usize> = s
-                .cells
-                .iter()
-                .enumerate()
-                .map(|(c, &(_, _, packed))| (packed, c))
-                .collect();
+            // The cells were made in (z, y, x) order: sorted by packed
+            // coordinates.
+            let index = |q: u32| s.cells.binary_search_by_key(&q, |&(_, _, p)| p).ok();
             let mut next = vec![false; s.cells.len()];
             for (c, &(_, _, packed)) in s.cells.iter().enumerate() {
                 if !found[c] {
@@ -548,7 +545,7 @@ fn features(
                         let same = [0, 9, 18]
                             .iter()
                             .all(|&o| o == sh || (q >> o) & 511 == (packed >> o) & 511);
-                        if let Some(&d) = index.get(&q).filter(|_| same) {
+                        if let Some(d) = index(q).filter(|_| same) {
                             next[d] |= !s.spread[d];
                         }
                     }
@@ -614,8 +611,8 @@ fn features(
     }
     // Shared segments: fan triangles `f1 a b` and `f2 b a` of two cells
     // that share no other segment.
-    let mut seg: HashMap<(u32, u32), usize> = HashMap::new();
-    let mut pairs: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut seg: FastMap<(u32, u32), usize> = FastMap::default();
+    let mut pairs: FastMap<(u32, u32), u32> = FastMap::default();
     let mut shared = Vec::new();
     for (ti, t) in fans.iter().enumerate() {
         let key = (t[1].min(t[2]), t[1].max(t[2]));
@@ -661,7 +658,15 @@ fn features(
     let mut group: Vec<usize> = (0..feats.len()).collect();
     let mut dead = vec![false; fans.len()];
     let mut merged = vec![false; feats.len()];
-    let cycle_of = |c: usize| fans.iter().zip(&fan_of).filter(move |(_, &d)| d == c);
+    // The fan triangles of each cell are consecutive in `fans`.
+    let mut fan_range = vec![0..0; feats.len()];
+    for (ti, &c) in fan_of.iter().enumerate() {
+        if fan_range[c].is_empty() {
+            fan_range[c] = ti..ti;
+        }
+        fan_range[c].end = ti + 1;
+    }
+    let cycle_of = |c: usize| fans[fan_range[c].clone()].iter();
     for &(o, ti) in &shared {
         let (c1, c2) = (fan_of[o], fan_of[ti]);
         if merged[c1] || merged[c2] || !single(&fans, o, ti) {
@@ -674,7 +679,7 @@ fn features(
             continue;
         }
         let common = cycle_of(c1)
-            .filter(|(t, _)| cycle_of(c2).any(|(u, _)| u[1] == t[1]))
+            .filter(|t| cycle_of(c2).any(|u| u[1] == t[1]))
             .count();
         if common != 2 {
             continue;
@@ -693,7 +698,7 @@ fn features(
     // Two cells whose cycles share two segments (an ambiguous face) flip
     // one of them at most, so the edge `f1 f2` is made once.
     let mut partner = vec![usize::MAX; fans.len()];
-    let mut joined = std::collections::HashSet::new();
+    let mut joined = FastSet::default();
     for &(o, ti) in &shared {
         let (f1, f2) = (fans[o][0], fans[ti][0]);
         let fresh = !joined.contains(&(f1.min(f2), f1.max(f2)));
