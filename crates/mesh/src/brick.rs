@@ -456,11 +456,14 @@ pub fn mesh_brick(
 
 /// Whether the corner samples of the cell at node `l` (strides `sy`, `sz`
 /// in `vals`) could hide a feature: the gradients from the differences
-/// along each corner's three cell edges differ by more than 20 degrees
-/// somewhere, or one of them vanishes. A plane passes (its differences
-/// are the same everywhere); only cells that fail pay for gradients.
+/// along each corner's three cell edges differ by more than the feature
+/// angle ([`crate::sharp::FEATURE_COS`], which the crossings' normals must
+/// exceed too) somewhere, or one of them vanishes. A plane passes (its
+/// differences are the same everywhere); only cells that fail pay for
+/// gradients. A crease near a corner that mixes the two sides too little
+/// here is found from the neighbour cells ([`features`], second pass).
 fn spread_at_corners(vals: &[f32], l: usize, sy: usize, sz: usize) -> bool {
-    const COS: f32 = 0.939_692_6;
+    const COS: f32 = crate::sharp::FEATURE_COS as f32;
     let v = |x: usize, y: usize, z: usize| vals[l + x + y * sy + z * sz];
     let g: [[f32; 3]; 8] = std::array::from_fn(|c| {
         let (x, y, z) = (c & 1, c >> 1 & 1, c >> 2);
@@ -531,9 +534,26 @@ fn features(
     let mut pass: Vec<usize> = (0..s.cells.len()).filter(|&c| s.spread[c]).collect();
     for round in 0..2 {
         if round == 1 {
-            // The cells were made in (z, y, x) order: sorted by packed
-            // coordinates.
-            let index = |q: u32| s.cells.binary_search_by_key(&q, |&(_, _, p)| p).ok();
+            // The cells were made in (z, y, x) order: those of row (y, z)
+            // are `s.cells[row[y + ny z]..row[y + ny z + 1]]`, by x.
+            let ny = n[1] - 1;
+            let mut row = vec![0u32; ny * (n[2] - 1) + 1];
+            for &(_, _, packed) in &s.cells {
+                row[(packed >> 9 & 511) as usize + ny * (packed >> 18) as usize + 1] += 1;
+            }
+            for r in 1..row.len() {
+                row[r] += row[r - 1];
+            }
+            let cells = &s.cells;
+            let index = |q: u32| {
+                let (j, k) = ((q >> 9 & 511) as usize, (q >> 18 & 511) as usize);
+                if j >= ny || k + 1 >= n[2] {
+                    return None;
+                }
+                let r = j + ny * k;
+                let (a, b) = (row[r] as usize, row[r + 1] as usize);
+                (a..b).find(|&c| cells[c].2 == q)
+            };
             let mut next = vec![false; s.cells.len()];
             for (c, &(_, _, packed)) in s.cells.iter().enumerate() {
                 if !found[c] {
