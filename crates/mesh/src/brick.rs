@@ -523,6 +523,7 @@ fn features(
     let mut fans: Vec<[u32; 3]> = Vec::new();
     let mut fan_of: Vec<usize> = Vec::new();
     let (mut vs, mut ps, mut ns) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut spans, mut of_cycle, mut results) = (Vec::new(), Vec::new(), Vec::new());
     let mut pinned = Vec::new();
     let mut planar = Vec::new();
     // Two passes: the cells whose corner samples spread, then the surface
@@ -577,52 +578,69 @@ fn features(
             }
         }
         crossing_normals(grid, lo, table, s, &pass, &mut done, &mut normals);
+        // Every cycle of the pass's cells, then their feature points at
+        // once (in cell units, the cell's first corner at the origin).
+        vs.clear();
+        ps.clear();
+        ns.clear();
+        spans.clear();
+        of_cycle.clear();
         for &c in &pass {
             let (mask, base, packed) = s.cells[c];
             let m = mask as usize;
             let t0 = table.start[m] as usize;
             let cell = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
             let corner = grid.node_pos(std::array::from_fn(|a| lo[a] + cell[a]));
-            for cy in &cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize] {
+            for (ci, cy) in cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize]
+                .iter()
+                .enumerate()
+            {
                 let tris = cy.tris.start as usize..cy.tris.end as usize;
-                vs.clear();
+                let from = vs.len();
                 for &e in &cy.edges {
                     let v = tris.clone().find_map(|t| {
                         let tri = s.tris[base as usize + t - t0];
                         table.tris[t].iter().position(|&x| x == e).map(|q| tri[q])
                     });
-                    vs.push(v.expect("a cycle's crossings are its triangles' corners"));
-                }
-                ps.clear();
-                ns.clear();
-                for &v in &vs {
+                    let v = v.expect("a cycle's crossings are its triangles' corners");
+                    vs.push(v);
                     let i = s.remap[v as usize] as usize;
                     let p = s.pos[i];
                     ps.push(std::array::from_fn(|k| (p[k] as f64 - corner[k]) / h));
                     ns.push(normals[i]);
                 }
-                let Some(feature) = crate::sharp::feature_point(&ps, &ns) else {
-                    continue;
-                };
-                if feature.planar {
-                    pinned.extend_from_slice(&vs);
-                }
-                let Some(x) = feature.point else {
-                    continue;
-                };
-                found[c] = true;
-                planar.push(feature.planar);
-                let id = first + feats.len() as u32;
-                let f = feats.len();
-                feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
-                let start = old_tris.len();
-                old_tris.extend(tris.map(|t| base as usize + t - t0));
-                old.push(start..old_tris.len());
-                let n = vs.len();
-                for i in 0..n {
-                    fans.push([id, vs[i], vs[(i + 1) % n]]);
-                    fan_of.push(f);
-                }
+                spans.push(from..vs.len());
+                of_cycle.push((c, cycles.start[m] as usize + ci, corner));
+            }
+        }
+        crate::sharp::feature_points(&ps, &ns, &spans, &mut results);
+        for ((span, &(c, ci, corner)), feature) in spans.iter().zip(&of_cycle).zip(&results) {
+            let (_, base, _) = s.cells[c];
+            let t0 = table.start[s.cells[c].0 as usize] as usize;
+            let cy = &cycles.cycles[ci];
+            let tris = cy.tris.start as usize..cy.tris.end as usize;
+            let vs = &vs[span.clone()];
+            let Some(feature) = feature else {
+                continue;
+            };
+            if feature.planar {
+                pinned.extend_from_slice(vs);
+            }
+            let Some(x) = feature.point else {
+                continue;
+            };
+            found[c] = true;
+            planar.push(feature.planar);
+            let id = first + feats.len() as u32;
+            let f = feats.len();
+            feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
+            let start = old_tris.len();
+            old_tris.extend(tris.map(|t| base as usize + t - t0));
+            old.push(start..old_tris.len());
+            let n = vs.len();
+            for i in 0..n {
+                fans.push([id, vs[i], vs[(i + 1) % n]]);
+                fan_of.push(f);
             }
         }
     }

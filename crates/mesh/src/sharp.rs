@@ -92,6 +92,77 @@ fn eigen(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     ([a[0][0], a[1][1], a[2][2]], v)
 }
 
+/// How many matrices [`eigen_lanes`] takes at once.
+const LANES: usize = 4;
+
+/// [`eigen`] of `LANES` matrices side by side, each lane doing exactly the
+/// operations `eigen` does on it (rotations it would skip, and sweeps after
+/// it would have stopped, are computed and dropped), so the results are
+/// the same bits; the lanes' arithmetic runs in vector registers.
+fn eigen_lanes(m: [[[f64; 3]; 3]; LANES]) -> [([f64; 3], [[f64; 3]; 3]); LANES] {
+    type L = [f64; LANES];
+    let mut a: [[L; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| m.map(|x| x[r][c])));
+    let one: L = [1.0; LANES];
+    let zero: L = [0.0; LANES];
+    let mut v: [[L; 3]; 3] = [[one, zero, zero], [zero, one, zero], [zero, zero, one]];
+    let mut live = [true; LANES];
+    for _ in 0..32 {
+        for l in 0..LANES {
+            let off = a[0][1][l].abs() + a[0][2][l].abs() + a[1][2][l].abs();
+            let scale = a[0][0][l].abs() + a[1][1][l].abs() + a[2][2][l].abs();
+            if off <= 1e-15 * scale || off == 0.0 {
+                live[l] = false;
+            }
+        }
+        if !live.contains(&true) {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            let go: [bool; LANES] = std::array::from_fn(|l| live[l] && a[p][q][l] != 0.0);
+            if !go.contains(&true) {
+                continue;
+            }
+            let mut c = [0.0; LANES];
+            let mut s = [0.0; LANES];
+            for l in 0..LANES {
+                let theta = (a[q][q][l] - a[p][p][l]) / (2.0 * a[p][q][l]);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                c[l] = 1.0 / (t * t + 1.0).sqrt();
+                s[l] = t * c[l];
+            }
+            let pick = |new: f64, old: f64, l: usize| if go[l] { new } else { old };
+            for row in a.iter_mut() {
+                let (akp, akq) = (row[p], row[q]);
+                for l in 0..LANES {
+                    row[p][l] = pick(c[l] * akp[l] - s[l] * akq[l], akp[l], l);
+                    row[q][l] = pick(s[l] * akp[l] + c[l] * akq[l], akq[l], l);
+                }
+            }
+            let (rp, rq) = (a[p], a[q]);
+            for k in 0..3 {
+                for l in 0..LANES {
+                    a[p][k][l] = pick(c[l] * rp[k][l] - s[l] * rq[k][l], rp[k][l], l);
+                    a[q][k][l] = pick(s[l] * rp[k][l] + c[l] * rq[k][l], rq[k][l], l);
+                }
+            }
+            for row in v.iter_mut() {
+                let (vp, vq) = (row[p], row[q]);
+                for l in 0..LANES {
+                    row[p][l] = pick(c[l] * vp[l] - s[l] * vq[l], vp[l], l);
+                    row[q][l] = pick(s[l] * vp[l] + c[l] * vq[l], vq[l], l);
+                }
+            }
+        }
+    }
+    std::array::from_fn(|l| {
+        (
+            [a[0][0][l], a[1][1][l], a[2][2][l]],
+            std::array::from_fn(|r| std::array::from_fn(|c| v[r][c][l])),
+        )
+    })
+}
+
 /// Whether the unit normals `ns` spread by more than the feature angle.
 pub fn is_feature(ns: &[[f64; 3]]) -> bool {
     ns.iter()
@@ -123,6 +194,56 @@ pub const PLANAR: f64 = 0.005;
 /// `RESIDUAL` cells (root mean square) off the tangent planes. Whether the
 /// fan around it is proper is for the caller ([`fan_ok`], after flips).
 pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
+    let q = quadric(ps, ns)?;
+    let (lam, v) = eigen(q.a);
+    solve(ps, ns, &q, lam, v)
+}
+
+/// [`feature_point`] of many cycles at once, the vertices and normals of
+/// cycle `i` being `ps[r.clone()]` and `ns[r.clone()]` for the `i`-th range
+/// `r` of `cycles`: the same results, bit for bit, with the eigenvectors
+/// of several matrices found side by side ([`eigen_lanes`]).
+pub fn feature_points(
+    ps: &[[f64; 3]],
+    ns: &[[f64; 3]],
+    cycles: &[std::ops::Range<usize>],
+    out: &mut Vec<Option<Feature>>,
+) {
+    out.clear();
+    let qs: Vec<Option<Quadric>> = cycles
+        .iter()
+        .map(|r| quadric(&ps[r.clone()], &ns[r.clone()]))
+        .collect();
+    let which: Vec<usize> = (0..qs.len()).filter(|&i| qs[i].is_some()).collect();
+    let mut eig = vec![([0.0; 3], [[0.0; 3]; 3]); which.len()];
+    for (chunk, res) in which.chunks(LANES).zip(eig.chunks_mut(LANES)) {
+        let mut a = [[[0.0; 3]; 3]; LANES];
+        for (l, &i) in chunk.iter().enumerate() {
+            a[l] = qs[i].as_ref().expect("chosen").a;
+        }
+        let e = eigen_lanes(a);
+        res.copy_from_slice(&e[..chunk.len()]);
+    }
+    let mut e = eig.into_iter();
+    for (r, q) in cycles.iter().zip(&qs) {
+        out.push(q.as_ref().and_then(|q| {
+            let (lam, v) = e.next().expect("one per quadric");
+            solve(&ps[r.clone()], &ns[r.clone()], q, lam, v)
+        }));
+    }
+}
+
+/// The error function of a cycle: its matrix, its vector and the mass
+/// point it is centred on.
+struct Quadric {
+    a: [[f64; 3]; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+}
+
+/// The error function of the cycle `ps`, `ns` when its normals spread by
+/// the feature angle and none is missing.
+fn quadric(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Quadric> {
     let n = ps.len();
     if n < 3 || ns.iter().any(|v| dot(*v, *v) < 0.5) || !is_feature(ns) {
         return None;
@@ -144,7 +265,19 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
             }
         }
     }
-    let (lam, v) = eigen(a);
+    Some(Quadric { a, b, c })
+}
+
+/// The feature of the cycle `ps`, `ns` with error function `q`, whose
+/// matrix has eigenvalues `lam` and eigenvectors (columns) `v`.
+fn solve(
+    ps: &[[f64; 3]],
+    ns: &[[f64; 3]],
+    q: &Quadric,
+    lam: [f64; 3],
+    v: [[f64; 3]; 3],
+) -> Option<Feature> {
+    let (n, b, c) = (ps.len(), q.b, q.c);
     let top = lam.iter().cloned().fold(0.0, f64::max);
     let mut x = c;
     let mut kept = 0;
@@ -298,6 +431,49 @@ mod tests {
             for r in 0..3 {
                 let av = a[r][0] * col[0] + a[r][1] * col[1] + a[r][2] * col[2];
                 assert!((av - l[k] * col[r]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn eigen_lanes_are_eigen_bit_for_bit() {
+        // Matrices of unit normals as the error functions make them, some
+        // with zero off-diagonal entries (skipped rotations), some already
+        // diagonal (lanes that stop at once).
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for round in 0..200 {
+            let m: [[[f64; 3]; 3]; LANES] = std::array::from_fn(|l| {
+                let mut a = [[0.0; 3]; 3];
+                for _ in 0..3 + (round + l) % 4 {
+                    let mut n = [rnd(), rnd(), rnd()];
+                    match (round + 2 * l) % 5 {
+                        0 => n[2] = 0.0,
+                        1 => n = [0.0, 0.0, 1.0],
+                        _ => {}
+                    }
+                    let len = dot(n, n).sqrt();
+                    for r in 0..3 {
+                        for s in 0..3 {
+                            a[r][s] += n[r] * n[s] / (len * len);
+                        }
+                    }
+                }
+                a
+            });
+            let lanes = eigen_lanes(m);
+            for l in 0..LANES {
+                let (lam, v) = eigen(m[l]);
+                assert_eq!(lam.map(f64::to_bits), lanes[l].0.map(f64::to_bits));
+                assert_eq!(
+                    v.map(|r| r.map(f64::to_bits)),
+                    lanes[l].1.map(|r| r.map(f64::to_bits))
+                );
             }
         }
     }
