@@ -196,7 +196,13 @@ pub const PLANAR: f64 = 0.005;
 pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
     let q = quadric(ps, ns)?;
     let (lam, v) = eigen(q.a);
-    solve(ps, ns, &q, lam, v)
+    match solve(ps, ns, &q, lam, v) {
+        Step::Done(f) => f,
+        Step::Line { x, along } => {
+            let t = nearest_to_cell(x, along);
+            judge(ps, ns, std::array::from_fn(|k| x[k] + t * along[k]))
+        }
+    }
 }
 
 /// [`feature_point`] of many cycles at once, the vertices and normals of
@@ -225,11 +231,35 @@ pub fn feature_points(
         res.copy_from_slice(&e[..chunk.len()]);
     }
     let mut e = eig.into_iter();
-    for (r, q) in cycles.iter().zip(&qs) {
+    let mut lines = Vec::new();
+    for (i, (r, q)) in cycles.iter().zip(&qs).enumerate() {
         out.push(q.as_ref().and_then(|q| {
             let (lam, v) = e.next().expect("one per quadric");
-            solve(&ps[r.clone()], &ns[r.clone()], q, lam, v)
+            match solve(&ps[r.clone()], &ns[r.clone()], q, lam, v) {
+                Step::Done(f) => f,
+                Step::Line { x, along } => {
+                    lines.push((i, x, along));
+                    None
+                }
+            }
         }));
+    }
+    for chunk in lines.chunks(LANES) {
+        let mut xs = [[0.5; 3]; LANES];
+        let mut alongs = [[1.0, 0.0, 0.0]; LANES];
+        for (l, &(_, x, along)) in chunk.iter().enumerate() {
+            xs[l] = x;
+            alongs[l] = along;
+        }
+        let ts = nearest_lanes(xs, alongs);
+        for (&(i, x, along), t) in chunk.iter().zip(ts) {
+            let r = cycles[i].clone();
+            out[i] = judge(
+                &ps[r.clone()],
+                &ns[r],
+                std::array::from_fn(|k| x[k] + t * along[k]),
+            );
+        }
     }
 }
 
@@ -270,14 +300,8 @@ fn quadric(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Quadric> {
 
 /// The feature of the cycle `ps`, `ns` with error function `q`, whose
 /// matrix has eigenvalues `lam` and eigenvectors (columns) `v`.
-fn solve(
-    ps: &[[f64; 3]],
-    ns: &[[f64; 3]],
-    q: &Quadric,
-    lam: [f64; 3],
-    v: [[f64; 3]; 3],
-) -> Option<Feature> {
-    let (n, b, c) = (ps.len(), q.b, q.c);
+fn solve(ps: &[[f64; 3]], ns: &[[f64; 3]], q: &Quadric, lam: [f64; 3], v: [[f64; 3]; 3]) -> Step {
+    let (b, c) = (q.b, q.c);
     let top = lam.iter().cloned().fold(0.0, f64::max);
     let mut x = c;
     let mut kept = 0;
@@ -319,15 +343,30 @@ fn solve(
             // are all outside is seen only by its neighbours, and each of
             // them must put its vertex on the crease where it passes them
             // for the chain of flipped segments to follow it.
-            let t = if t0 <= t1 && t0.is_finite() && t1.is_finite() {
-                0.5 * (t0 + t1)
+            if t0 <= t1 && t0.is_finite() && t1.is_finite() {
+                let t = 0.5 * (t0 + t1);
+                std::array::from_fn(|k| x[k] + t * along[k])
             } else {
-                nearest_to_cell(x, along)
-            };
-            std::array::from_fn(|k| x[k] + t * along[k])
+                return Step::Line { x, along };
+            }
         }
-        _ => return None,
+        _ => return Step::Done(None),
     };
+    Step::Done(judge(ps, ns, x))
+}
+
+/// Where [`solve`] got to: the feature, or a crease line that misses the
+/// cell, whose point nearest the cell ([`nearest_to_cell`]) is for
+/// [`judge`].
+enum Step {
+    Done(Option<Feature>),
+    Line { x: [f64; 3], along: [f64; 3] },
+}
+
+/// The feature of the cycle `ps`, `ns` whose tangent planes meet best at
+/// `x`.
+fn judge(ps: &[[f64; 3]], ns: &[[f64; 3]], x: [f64; 3]) -> Option<Feature> {
+    let n = ps.len();
     // Tangent planes of a crease or corner meet in the point; those of a
     // smooth surface curved within the cell (a tube a cell or two thick)
     // miss it by a fair part of the cell: that is no sharp feature.
@@ -371,6 +410,38 @@ fn nearest_to_cell(x: [f64; 3], along: [f64; 3]) -> f64 {
         }
     }
     0.5 * (a + b)
+}
+
+/// [`nearest_to_cell`] of `LANES` lines side by side, each lane doing
+/// exactly its operations (the same bits).
+fn nearest_lanes(x: [[f64; 3]; LANES], along: [[f64; 3]; LANES]) -> [f64; LANES] {
+    let gap = |t: [f64; LANES]| -> [f64; LANES] {
+        std::array::from_fn(|l| {
+            (0..3)
+                .map(|k| {
+                    let v = x[l][k] + t[l] * along[l][k];
+                    (v.max(0.0) - v).max(v - v.min(1.0)).powi(2)
+                })
+                .sum()
+        })
+    };
+    let c: [f64; LANES] = std::array::from_fn(|l| dot(sub([0.5; 3], x[l]), along[l]));
+    let mut a = c.map(|c| c - 2.0);
+    let mut b = c.map(|c| c + 2.0);
+    const R: f64 = 0.618_033_988_749_895;
+    for _ in 0..60 {
+        let p: [f64; LANES] = std::array::from_fn(|l| b[l] - R * (b[l] - a[l]));
+        let q: [f64; LANES] = std::array::from_fn(|l| a[l] + R * (b[l] - a[l]));
+        let (gp, gq) = (gap(p), gap(q));
+        for l in 0..LANES {
+            if gp[l] <= gq[l] {
+                b[l] = q[l];
+            } else {
+                a[l] = p[l];
+            }
+        }
+    }
+    std::array::from_fn(|l| 0.5 * (a[l] + b[l]))
 }
 
 /// Whether the fan triangle `f a b` (positions in any common frame, `na`
@@ -474,6 +545,29 @@ mod tests {
                     v.map(|r| r.map(f64::to_bits)),
                     lanes[l].1.map(|r| r.map(f64::to_bits))
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn nearest_lanes_are_nearest_to_cell_bit_for_bit() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let x: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| 4.0 * rnd() - 1.5));
+            let along: [[f64; 3]; LANES] = std::array::from_fn(|_| {
+                let d = [0; 3].map(|_| rnd() - 0.5);
+                let len = dot(d, d).sqrt();
+                d.map(|v| v / len)
+            });
+            let ts = nearest_lanes(x, along);
+            for l in 0..LANES {
+                assert_eq!(ts[l].to_bits(), nearest_to_cell(x[l], along[l]).to_bits());
             }
         }
     }
