@@ -456,11 +456,14 @@ pub fn mesh_brick(
 
 /// Whether the corner samples of the cell at node `l` (strides `sy`, `sz`
 /// in `vals`) could hide a feature: the gradients from the differences
-/// along each corner's three cell edges differ by more than 20 degrees
-/// somewhere, or one of them vanishes. A plane passes (its differences
-/// are the same everywhere); only cells that fail pay for gradients.
+/// along each corner's three cell edges differ by more than the feature
+/// angle ([`crate::sharp::FEATURE_COS`], which the crossings' normals must
+/// exceed too) somewhere, or one of them vanishes. A plane passes (its
+/// differences are the same everywhere); only cells that fail pay for
+/// gradients. A crease near a corner that mixes the two sides too little
+/// here is found from the neighbour cells ([`features`], second pass).
 fn spread_at_corners(vals: &[f32], l: usize, sy: usize, sz: usize) -> bool {
-    const COS: f32 = 0.939_692_6;
+    const COS: f32 = crate::sharp::FEATURE_COS as f32;
     let v = |x: usize, y: usize, z: usize| vals[l + x + y * sy + z * sz];
     let g: [[f32; 3]; 8] = std::array::from_fn(|c| {
         let (x, y, z) = (c & 1, c >> 1 & 1, c >> 2);
@@ -505,7 +508,7 @@ fn features(
     table: &CellTable,
     s: &mut Scratch,
 ) -> (Vec<[f32; 3]>, Vec<u32>, Vec<Rim>) {
-    use std::collections::HashMap;
+    use crate::fasthash::{FastMap, FastSet};
     let cycles = crate::cubes::cycle_table();
     let h = grid.h;
     let np = s.pos.len();
@@ -520,6 +523,7 @@ fn features(
     let mut fans: Vec<[u32; 3]> = Vec::new();
     let mut fan_of: Vec<usize> = Vec::new();
     let (mut vs, mut ps, mut ns) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut spans, mut of_cycle, mut results) = (Vec::new(), Vec::new(), Vec::new());
     let mut pinned = Vec::new();
     let mut planar = Vec::new();
     // Two passes: the cells whose corner samples spread, then the surface
@@ -531,12 +535,26 @@ fn features(
     let mut pass: Vec<usize> = (0..s.cells.len()).filter(|&c| s.spread[c]).collect();
     for round in 0..2 {
         if round == 1 {
-            let index: HashMap<u32, usize> = s
-                .cells
-                .iter()
-                .enumerate()
-                .map(|(c, &(_, _, packed))| (packed, c))
-                .collect();
+            // The cells were made in (z, y, x) order: those of row (y, z)
+            // are `s.cells[row[y + ny z]..row[y + ny z + 1]]`, by x.
+            let ny = n[1] - 1;
+            let mut row = vec![0u32; ny * (n[2] - 1) + 1];
+            for &(_, _, packed) in &s.cells {
+                row[(packed >> 9 & 511) as usize + ny * (packed >> 18) as usize + 1] += 1;
+            }
+            for r in 1..row.len() {
+                row[r] += row[r - 1];
+            }
+            let cells = &s.cells;
+            let index = |q: u32| {
+                let (j, k) = ((q >> 9 & 511) as usize, (q >> 18 & 511) as usize);
+                if j >= ny || k + 1 >= n[2] {
+                    return None;
+                }
+                let r = j + ny * k;
+                let (a, b) = (row[r] as usize, row[r + 1] as usize);
+                (a..b).find(|&c| cells[c].2 == q)
+            };
             let mut next = vec![false; s.cells.len()];
             for (c, &(_, _, packed)) in s.cells.iter().enumerate() {
                 if !found[c] {
@@ -548,7 +566,7 @@ fn features(
                         let same = [0, 9, 18]
                             .iter()
                             .all(|&o| o == sh || (q >> o) & 511 == (packed >> o) & 511);
-                        if let Some(&d) = index.get(&q).filter(|_| same) {
+                        if let Some(d) = index(q).filter(|_| same) {
                             next[d] |= !s.spread[d];
                         }
                     }
@@ -560,52 +578,69 @@ fn features(
             }
         }
         crossing_normals(grid, lo, table, s, &pass, &mut done, &mut normals);
+        // Every cycle of the pass's cells, then their feature points at
+        // once (in cell units, the cell's first corner at the origin).
+        vs.clear();
+        ps.clear();
+        ns.clear();
+        spans.clear();
+        of_cycle.clear();
         for &c in &pass {
             let (mask, base, packed) = s.cells[c];
             let m = mask as usize;
             let t0 = table.start[m] as usize;
             let cell = [0, 9, 18].map(|sh| (packed >> sh) as usize & 511);
             let corner = grid.node_pos(std::array::from_fn(|a| lo[a] + cell[a]));
-            for cy in &cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize] {
+            for (ci, cy) in cycles.cycles[cycles.start[m] as usize..cycles.start[m + 1] as usize]
+                .iter()
+                .enumerate()
+            {
                 let tris = cy.tris.start as usize..cy.tris.end as usize;
-                vs.clear();
+                let from = vs.len();
                 for &e in &cy.edges {
                     let v = tris.clone().find_map(|t| {
                         let tri = s.tris[base as usize + t - t0];
                         table.tris[t].iter().position(|&x| x == e).map(|q| tri[q])
                     });
-                    vs.push(v.expect("a cycle's crossings are its triangles' corners"));
-                }
-                ps.clear();
-                ns.clear();
-                for &v in &vs {
+                    let v = v.expect("a cycle's crossings are its triangles' corners");
+                    vs.push(v);
                     let i = s.remap[v as usize] as usize;
                     let p = s.pos[i];
                     ps.push(std::array::from_fn(|k| (p[k] as f64 - corner[k]) / h));
                     ns.push(normals[i]);
                 }
-                let Some(feature) = crate::sharp::feature_point(&ps, &ns) else {
-                    continue;
-                };
-                if feature.planar {
-                    pinned.extend_from_slice(&vs);
-                }
-                let Some(x) = feature.point else {
-                    continue;
-                };
-                found[c] = true;
-                planar.push(feature.planar);
-                let id = first + feats.len() as u32;
-                let f = feats.len();
-                feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
-                let start = old_tris.len();
-                old_tris.extend(tris.map(|t| base as usize + t - t0));
-                old.push(start..old_tris.len());
-                let n = vs.len();
-                for i in 0..n {
-                    fans.push([id, vs[i], vs[(i + 1) % n]]);
-                    fan_of.push(f);
-                }
+                spans.push(from..vs.len());
+                of_cycle.push((c, cycles.start[m] as usize + ci, corner));
+            }
+        }
+        crate::sharp::feature_points(&ps, &ns, &spans, &mut results);
+        for ((span, &(c, ci, corner)), feature) in spans.iter().zip(&of_cycle).zip(&results) {
+            let (_, base, _) = s.cells[c];
+            let t0 = table.start[s.cells[c].0 as usize] as usize;
+            let cy = &cycles.cycles[ci];
+            let tris = cy.tris.start as usize..cy.tris.end as usize;
+            let vs = &vs[span.clone()];
+            let Some(feature) = feature else {
+                continue;
+            };
+            if feature.planar {
+                pinned.extend_from_slice(vs);
+            }
+            let Some(x) = feature.point else {
+                continue;
+            };
+            found[c] = true;
+            planar.push(feature.planar);
+            let id = first + feats.len() as u32;
+            let f = feats.len();
+            feats.push(std::array::from_fn(|k| (corner[k] + h * x[k]) as f32));
+            let start = old_tris.len();
+            old_tris.extend(tris.map(|t| base as usize + t - t0));
+            old.push(start..old_tris.len());
+            let n = vs.len();
+            for i in 0..n {
+                fans.push([id, vs[i], vs[(i + 1) % n]]);
+                fan_of.push(f);
             }
         }
     }
@@ -614,8 +649,8 @@ fn features(
     }
     // Shared segments: fan triangles `f1 a b` and `f2 b a` of two cells
     // that share no other segment.
-    let mut seg: HashMap<(u32, u32), usize> = HashMap::new();
-    let mut pairs: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut seg: FastMap<(u32, u32), usize> = FastMap::default();
+    let mut pairs: FastMap<(u32, u32), u32> = FastMap::default();
     let mut shared = Vec::new();
     for (ti, t) in fans.iter().enumerate() {
         let key = (t[1].min(t[2]), t[1].max(t[2]));
@@ -661,7 +696,15 @@ fn features(
     let mut group: Vec<usize> = (0..feats.len()).collect();
     let mut dead = vec![false; fans.len()];
     let mut merged = vec![false; feats.len()];
-    let cycle_of = |c: usize| fans.iter().zip(&fan_of).filter(move |(_, &d)| d == c);
+    // The fan triangles of each cell are consecutive in `fans`.
+    let mut fan_range = vec![0..0; feats.len()];
+    for (ti, &c) in fan_of.iter().enumerate() {
+        if fan_range[c].is_empty() {
+            fan_range[c] = ti..ti;
+        }
+        fan_range[c].end = ti + 1;
+    }
+    let cycle_of = |c: usize| fans[fan_range[c].clone()].iter();
     for &(o, ti) in &shared {
         let (c1, c2) = (fan_of[o], fan_of[ti]);
         if merged[c1] || merged[c2] || !single(&fans, o, ti) {
@@ -674,7 +717,7 @@ fn features(
             continue;
         }
         let common = cycle_of(c1)
-            .filter(|(t, _)| cycle_of(c2).any(|(u, _)| u[1] == t[1]))
+            .filter(|t| cycle_of(c2).any(|u| u[1] == t[1]))
             .count();
         if common != 2 {
             continue;
@@ -693,7 +736,7 @@ fn features(
     // Two cells whose cycles share two segments (an ambiguous face) flip
     // one of them at most, so the edge `f1 f2` is made once.
     let mut partner = vec![usize::MAX; fans.len()];
-    let mut joined = std::collections::HashSet::new();
+    let mut joined = FastSet::default();
     for &(o, ti) in &shared {
         let (f1, f2) = (fans[o][0], fans[ti][0]);
         let fresh = !joined.contains(&(f1.min(f2), f1.max(f2)));

@@ -34,6 +34,7 @@ pub mod correct;
 pub mod cubes;
 pub mod decimate;
 pub mod edges;
+mod fasthash;
 mod grid;
 pub mod job;
 mod lanes;

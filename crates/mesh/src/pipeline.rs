@@ -293,9 +293,9 @@ impl Plan {
 /// keeps the sums of the triangles before the flip (the vertices of
 /// features with flat sides do not move).
 fn cross_flips(h: f64, g: &mut Group, mut next: Option<&mut Group>) {
-    use std::collections::{HashMap, HashSet};
+    use crate::fasthash::{FastMap, FastSet};
     const DEAD: [u32; 3] = [u32::MAX; 3];
-    let mut at: HashMap<[u64; 2], (usize, usize)> = HashMap::new();
+    let mut at: FastMap<[u64; 2], (usize, usize)> = FastMap::default();
     for grp in std::iter::once(&*g).chain(next.as_deref()) {
         for (j, m) in grp.meshes.iter().enumerate() {
             for (r, rim) in m.rims.iter().enumerate() {
@@ -303,7 +303,7 @@ fn cross_flips(h: f64, g: &mut Group, mut next: Option<&mut Group>) {
             }
         }
     }
-    let mut joined: HashSet<(u32, usize, u32)> = HashSet::new();
+    let mut joined: FastSet<(u32, usize, u32)> = FastSet::default();
     for j in 0..g.meshes.len() {
         let lower = g.first + j;
         for r in 0..g.meshes[j].rims.len() {

@@ -92,6 +92,77 @@ fn eigen(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     ([a[0][0], a[1][1], a[2][2]], v)
 }
 
+/// How many matrices [`eigen_lanes`] takes at once.
+const LANES: usize = 4;
+
+/// [`eigen`] of `LANES` matrices side by side, each lane doing exactly the
+/// operations `eigen` does on it (rotations it would skip, and sweeps after
+/// it would have stopped, are computed and dropped), so the results are
+/// the same bits; the lanes' arithmetic runs in vector registers.
+fn eigen_lanes(m: [[[f64; 3]; 3]; LANES]) -> [([f64; 3], [[f64; 3]; 3]); LANES] {
+    type L = [f64; LANES];
+    let mut a: [[L; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| m.map(|x| x[r][c])));
+    let one: L = [1.0; LANES];
+    let zero: L = [0.0; LANES];
+    let mut v: [[L; 3]; 3] = [[one, zero, zero], [zero, one, zero], [zero, zero, one]];
+    let mut live = [true; LANES];
+    for _ in 0..32 {
+        for l in 0..LANES {
+            let off = a[0][1][l].abs() + a[0][2][l].abs() + a[1][2][l].abs();
+            let scale = a[0][0][l].abs() + a[1][1][l].abs() + a[2][2][l].abs();
+            if off <= 1e-15 * scale || off == 0.0 {
+                live[l] = false;
+            }
+        }
+        if !live.contains(&true) {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            let go: [bool; LANES] = std::array::from_fn(|l| live[l] && a[p][q][l] != 0.0);
+            if !go.contains(&true) {
+                continue;
+            }
+            let mut c = [0.0; LANES];
+            let mut s = [0.0; LANES];
+            for l in 0..LANES {
+                let theta = (a[q][q][l] - a[p][p][l]) / (2.0 * a[p][q][l]);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                c[l] = 1.0 / (t * t + 1.0).sqrt();
+                s[l] = t * c[l];
+            }
+            let pick = |new: f64, old: f64, l: usize| if go[l] { new } else { old };
+            for row in a.iter_mut() {
+                let (akp, akq) = (row[p], row[q]);
+                for l in 0..LANES {
+                    row[p][l] = pick(c[l] * akp[l] - s[l] * akq[l], akp[l], l);
+                    row[q][l] = pick(s[l] * akp[l] + c[l] * akq[l], akq[l], l);
+                }
+            }
+            let (rp, rq) = (a[p], a[q]);
+            for k in 0..3 {
+                for l in 0..LANES {
+                    a[p][k][l] = pick(c[l] * rp[k][l] - s[l] * rq[k][l], rp[k][l], l);
+                    a[q][k][l] = pick(s[l] * rp[k][l] + c[l] * rq[k][l], rq[k][l], l);
+                }
+            }
+            for row in v.iter_mut() {
+                let (vp, vq) = (row[p], row[q]);
+                for l in 0..LANES {
+                    row[p][l] = pick(c[l] * vp[l] - s[l] * vq[l], vp[l], l);
+                    row[q][l] = pick(s[l] * vp[l] + c[l] * vq[l], vq[l], l);
+                }
+            }
+        }
+    }
+    std::array::from_fn(|l| {
+        (
+            [a[0][0][l], a[1][1][l], a[2][2][l]],
+            std::array::from_fn(|r| std::array::from_fn(|c| v[r][c][l])),
+        )
+    })
+}
+
 /// Whether the unit normals `ns` spread by more than the feature angle.
 pub fn is_feature(ns: &[[f64; 3]]) -> bool {
     ns.iter()
@@ -123,6 +194,86 @@ pub const PLANAR: f64 = 0.005;
 /// `RESIDUAL` cells (root mean square) off the tangent planes. Whether the
 /// fan around it is proper is for the caller ([`fan_ok`], after flips).
 pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
+    let q = quadric(ps, ns)?;
+    let (lam, v) = eigen(q.a);
+    match solve(ps, ns, &q, lam, v) {
+        Step::Done(f) => f,
+        Step::Line { x, along } => {
+            let t = nearest_to_cell(x, along);
+            judge(ps, ns, std::array::from_fn(|k| x[k] + t * along[k]))
+        }
+    }
+}
+
+/// [`feature_point`] of many cycles at once, the vertices and normals of
+/// cycle `i` being `ps[r.clone()]` and `ns[r.clone()]` for the `i`-th range
+/// `r` of `cycles`: the same results, bit for bit, with the eigenvectors
+/// of several matrices found side by side ([`eigen_lanes`]).
+pub fn feature_points(
+    ps: &[[f64; 3]],
+    ns: &[[f64; 3]],
+    cycles: &[std::ops::Range<usize>],
+    out: &mut Vec<Option<Feature>>,
+) {
+    out.clear();
+    let qs: Vec<Option<Quadric>> = cycles
+        .iter()
+        .map(|r| quadric(&ps[r.clone()], &ns[r.clone()]))
+        .collect();
+    let which: Vec<usize> = (0..qs.len()).filter(|&i| qs[i].is_some()).collect();
+    let mut eig = vec![([0.0; 3], [[0.0; 3]; 3]); which.len()];
+    for (chunk, res) in which.chunks(LANES).zip(eig.chunks_mut(LANES)) {
+        let mut a = [[[0.0; 3]; 3]; LANES];
+        for (l, &i) in chunk.iter().enumerate() {
+            a[l] = qs[i].as_ref().expect("chosen").a;
+        }
+        let e = eigen_lanes(a);
+        res.copy_from_slice(&e[..chunk.len()]);
+    }
+    let mut e = eig.into_iter();
+    let mut lines = Vec::new();
+    for (i, (r, q)) in cycles.iter().zip(&qs).enumerate() {
+        out.push(q.as_ref().and_then(|q| {
+            let (lam, v) = e.next().expect("one per quadric");
+            match solve(&ps[r.clone()], &ns[r.clone()], q, lam, v) {
+                Step::Done(f) => f,
+                Step::Line { x, along } => {
+                    lines.push((i, x, along));
+                    None
+                }
+            }
+        }));
+    }
+    for chunk in lines.chunks(LANES) {
+        let mut xs = [[0.5; 3]; LANES];
+        let mut alongs = [[1.0, 0.0, 0.0]; LANES];
+        for (l, &(_, x, along)) in chunk.iter().enumerate() {
+            xs[l] = x;
+            alongs[l] = along;
+        }
+        let ts = nearest_lanes(xs, alongs);
+        for (&(i, x, along), t) in chunk.iter().zip(ts) {
+            let r = cycles[i].clone();
+            out[i] = judge(
+                &ps[r.clone()],
+                &ns[r],
+                std::array::from_fn(|k| x[k] + t * along[k]),
+            );
+        }
+    }
+}
+
+/// The error function of a cycle: its matrix, its vector and the mass
+/// point it is centred on.
+struct Quadric {
+    a: [[f64; 3]; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+}
+
+/// The error function of the cycle `ps`, `ns` when its normals spread by
+/// the feature angle and none is missing.
+fn quadric(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Quadric> {
     let n = ps.len();
     if n < 3 || ns.iter().any(|v| dot(*v, *v) < 0.5) || !is_feature(ns) {
         return None;
@@ -144,7 +295,13 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
             }
         }
     }
-    let (lam, v) = eigen(a);
+    Some(Quadric { a, b, c })
+}
+
+/// The feature of the cycle `ps`, `ns` with error function `q`, whose
+/// matrix has eigenvalues `lam` and eigenvectors (columns) `v`.
+fn solve(ps: &[[f64; 3]], ns: &[[f64; 3]], q: &Quadric, lam: [f64; 3], v: [[f64; 3]; 3]) -> Step {
+    let (b, c) = (q.b, q.c);
     let top = lam.iter().cloned().fold(0.0, f64::max);
     let mut x = c;
     let mut kept = 0;
@@ -186,15 +343,30 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
             // are all outside is seen only by its neighbours, and each of
             // them must put its vertex on the crease where it passes them
             // for the chain of flipped segments to follow it.
-            let t = if t0 <= t1 && t0.is_finite() && t1.is_finite() {
-                0.5 * (t0 + t1)
+            if t0 <= t1 && t0.is_finite() && t1.is_finite() {
+                let t = 0.5 * (t0 + t1);
+                std::array::from_fn(|k| x[k] + t * along[k])
             } else {
-                nearest_to_cell(x, along)
-            };
-            std::array::from_fn(|k| x[k] + t * along[k])
+                return Step::Line { x, along };
+            }
         }
-        _ => return None,
+        _ => return Step::Done(None),
     };
+    Step::Done(judge(ps, ns, x))
+}
+
+/// Where [`solve`] got to: the feature, or a crease line that misses the
+/// cell, whose point nearest the cell ([`nearest_to_cell`]) is for
+/// [`judge`].
+enum Step {
+    Done(Option<Feature>),
+    Line { x: [f64; 3], along: [f64; 3] },
+}
+
+/// The feature of the cycle `ps`, `ns` whose tangent planes meet best at
+/// `x`.
+fn judge(ps: &[[f64; 3]], ns: &[[f64; 3]], x: [f64; 3]) -> Option<Feature> {
+    let n = ps.len();
     // Tangent planes of a crease or corner meet in the point; those of a
     // smooth surface curved within the cell (a tube a cell or two thick)
     // miss it by a fair part of the cell: that is no sharp feature.
@@ -238,6 +410,38 @@ fn nearest_to_cell(x: [f64; 3], along: [f64; 3]) -> f64 {
         }
     }
     0.5 * (a + b)
+}
+
+/// [`nearest_to_cell`] of `LANES` lines side by side, each lane doing
+/// exactly its operations (the same bits).
+fn nearest_lanes(x: [[f64; 3]; LANES], along: [[f64; 3]; LANES]) -> [f64; LANES] {
+    let gap = |t: [f64; LANES]| -> [f64; LANES] {
+        std::array::from_fn(|l| {
+            (0..3)
+                .map(|k| {
+                    let v = x[l][k] + t[l] * along[l][k];
+                    (v.max(0.0) - v).max(v - v.min(1.0)).powi(2)
+                })
+                .sum()
+        })
+    };
+    let c: [f64; LANES] = std::array::from_fn(|l| dot(sub([0.5; 3], x[l]), along[l]));
+    let mut a = c.map(|c| c - 2.0);
+    let mut b = c.map(|c| c + 2.0);
+    const R: f64 = 0.618_033_988_749_895;
+    for _ in 0..60 {
+        let p: [f64; LANES] = std::array::from_fn(|l| b[l] - R * (b[l] - a[l]));
+        let q: [f64; LANES] = std::array::from_fn(|l| a[l] + R * (b[l] - a[l]));
+        let (gp, gq) = (gap(p), gap(q));
+        for l in 0..LANES {
+            if gp[l] <= gq[l] {
+                b[l] = q[l];
+            } else {
+                a[l] = p[l];
+            }
+        }
+    }
+    std::array::from_fn(|l| 0.5 * (a[l] + b[l]))
 }
 
 /// Whether the fan triangle `f a b` (positions in any common frame, `na`
@@ -298,6 +502,72 @@ mod tests {
             for r in 0..3 {
                 let av = a[r][0] * col[0] + a[r][1] * col[1] + a[r][2] * col[2];
                 assert!((av - l[k] * col[r]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn eigen_lanes_are_eigen_bit_for_bit() {
+        // Matrices of unit normals as the error functions make them, some
+        // with zero off-diagonal entries (skipped rotations), some already
+        // diagonal (lanes that stop at once).
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for round in 0..200 {
+            let m: [[[f64; 3]; 3]; LANES] = std::array::from_fn(|l| {
+                let mut a = [[0.0; 3]; 3];
+                for _ in 0..3 + (round + l) % 4 {
+                    let mut n = [rnd(), rnd(), rnd()];
+                    match (round + 2 * l) % 5 {
+                        0 => n[2] = 0.0,
+                        1 => n = [0.0, 0.0, 1.0],
+                        _ => {}
+                    }
+                    let len = dot(n, n).sqrt();
+                    for r in 0..3 {
+                        for s in 0..3 {
+                            a[r][s] += n[r] * n[s] / (len * len);
+                        }
+                    }
+                }
+                a
+            });
+            let lanes = eigen_lanes(m);
+            for l in 0..LANES {
+                let (lam, v) = eigen(m[l]);
+                assert_eq!(lam.map(f64::to_bits), lanes[l].0.map(f64::to_bits));
+                assert_eq!(
+                    v.map(|r| r.map(f64::to_bits)),
+                    lanes[l].1.map(|r| r.map(f64::to_bits))
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn nearest_lanes_are_nearest_to_cell_bit_for_bit() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let x: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| 4.0 * rnd() - 1.5));
+            let along: [[f64; 3]; LANES] = std::array::from_fn(|_| {
+                let d = [0; 3].map(|_| rnd() - 0.5);
+                let len = dot(d, d).sqrt();
+                d.map(|v| v / len)
+            });
+            let ts = nearest_lanes(x, along);
+            for l in 0..LANES {
+                assert_eq!(ts[l].to_bits(), nearest_to_cell(x[l], along[l]).to_bits());
             }
         }
     }
