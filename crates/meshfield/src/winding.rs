@@ -274,8 +274,9 @@ fn expansion_value(e: &Expansion, y: [f64; 3]) -> f64 {
     let k = e.k.map(|c| c as f64);
     let [a, b, c] = y;
     let r2 = a * a + b * b + c * c;
-    let ir2 = 1.0 / r2;
-    let ir3 = ir2 / r2.sqrt();
+    let ir = 1.0 / r2.sqrt();
+    let ir2 = ir * ir;
+    let ir3 = ir2 * ir;
     let (aa, bb, cc) = (a * a, b * b, c * c);
     let lin3 = k[0] + k[1] * a + k[2] * b + k[3] * c;
     let quad5 = k[4] * aa
