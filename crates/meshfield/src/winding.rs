@@ -269,7 +269,7 @@ fn lipschitz(e: &Expansion, r: f64) -> f64 {
 /// `tr(M) / r^3 - 3 y.M.y / r^5`; order 2,
 /// `(-3 (2 u.y + v.y) / r^5 + 15 T[y,y,y] / r^7) / 2` (u_i = T_jji,
 /// v_i = T_ijj), gathered by power of `1/r` ([`Expansion::k`]).
-#[inline]
+#[inline(always)]
 fn expansion_value(e: &Expansion, y: [f64; 3]) -> f64 {
     let k = e.k.map(|c| c as f64);
     let [a, b, c] = y;
@@ -295,28 +295,35 @@ fn expansion_value(e: &Expansion, y: [f64; 3]) -> f64 {
 /// Generalized winding number at `q` by the hierarchy.
 pub fn winding_number(bvh: &Bvh, exps: &[Expansion], q: [f64; 3]) -> f64 {
     let mut stack = [0u32; 128];
-    let mut sp = 1;
+    let mut sp = 0;
     let mut sum = 0.0;
-    while sp > 0 {
-        sp -= 1;
-        let ni = stack[sp] as usize;
+    // The node in hand; an opened node's left child comes next directly,
+    // its right one through the stack (the order of the sum is unchanged).
+    let mut ni = 0usize;
+    loop {
         let e = &exps[ni];
         let y = sub(e.center, q);
         if y[0] * y[0] + y[1] * y[1] + y[2] * y[2] > e.far2 {
             sum += expansion_value(e, y);
-            continue;
-        }
-        let node = &bvh.nodes[ni];
-        if node.is_leaf() {
-            let s = node.index as usize;
-            for t in &bvh.tris[s..s + node.count as usize] {
-                sum += solid_angle(q, t);
-            }
         } else {
-            stack[sp] = node.index;
-            stack[sp + 1] = ni as u32 + 1;
-            sp += 2;
+            let node = &bvh.nodes[ni];
+            if node.is_leaf() {
+                let s = node.index as usize;
+                for t in &bvh.tris[s..s + node.count as usize] {
+                    sum += solid_angle(q, t);
+                }
+            } else {
+                stack[sp] = node.index;
+                sp += 1;
+                ni += 1;
+                continue;
+            }
         }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        ni = stack[sp] as usize;
     }
     sum / FOUR_PI
 }
