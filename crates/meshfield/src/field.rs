@@ -155,7 +155,7 @@ impl SeedGrid {
 /// Cells of the [`SeedGrid`] per triangle, and the bounds of its size.
 const GRID_CELLS_PER_TRIANGLE: usize = 2;
 const GRID_MIN_CELLS: usize = 4096;
-const GRID_MAX_CELLS: usize = 1 << 18;
+const GRID_MAX_CELLS: usize = 1 << 16;
 
 impl fmt::Debug for MeshField {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
