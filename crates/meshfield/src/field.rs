@@ -830,7 +830,8 @@ impl Field for MeshField {
 
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
         // Neighbouring points of a block share their nearest triangle more
-        // often than not: the previous point's triangle seeds the search.
+        // often than not: outside the seed grid the previous point's
+        // triangle seeds the search.
         let mut prev = u32::MAX;
         for i in 0..out.len() {
             let p = [x[i] as f64, y[i] as f64, z[i] as f64];
@@ -839,7 +840,10 @@ impl Field for MeshField {
                 continue;
             }
             let mut seed = Hit::NONE;
-            if prev != u32::MAX {
+            // Inside the seed grid its cell's triangle seeds the search
+            // ([`MeshField::probe`]); the previous point's is for elsewhere.
+            let in_grid = self.grid.as_ref().is_some_and(|g| g.cell(p).is_some());
+            if prev != u32::MAX && !in_grid {
                 self.bvh.test(p, prev as usize, &mut seed);
             }
             let probe = self.probe(p, seed);
