@@ -42,17 +42,14 @@ impl Node {
     /// Squared distance from `p` to the box (0 inside).
     #[inline]
     pub fn dist2(&self, p: [f64; 3]) -> f64 {
+        // Branch free: the larger of the two excesses, and 0 inside (for a
+        // NaN coordinate the comparisons fall to 0, as before).
         let mut d = 0.0;
         for a in 0..3 {
-            let lo = self.lo[a] as f64;
-            let hi = self.hi[a] as f64;
-            let e = if p[a] < lo {
-                lo - p[a]
-            } else if p[a] > hi {
-                p[a] - hi
-            } else {
-                0.0
-            };
+            let u = self.lo[a] as f64 - p[a];
+            let v = p[a] - self.hi[a] as f64;
+            let e = if u > v { u } else { v };
+            let e = if e > 0.0 { e } else { 0.0 };
             d += e * e;
         }
         d
@@ -538,38 +535,41 @@ impl Bvh {
     pub fn closest(&self, p: [f64; 3], mut best: Hit) -> Hit {
         let mut stack = [(0u32, 0.0f64); STACK];
         let mut sp = 0;
-        stack[sp] = (0, self.nodes[0].dist2(p));
-        sp += 1;
-        while sp > 0 {
-            sp -= 1;
-            let (ni, d2) = stack[sp];
-            if d2 >= best.d2 {
-                continue;
-            }
-            let node = &self.nodes[ni as usize];
-            if node.is_leaf() {
-                let s = node.index as usize;
-                for t in s..s + node.count as usize {
-                    self.test(p, t, &mut best);
-                }
-            } else {
-                let (l, r) = (ni + 1, node.index);
-                let dl = self.nodes[l as usize].dist2(p);
-                let dr = self.nodes[r as usize].dist2(p);
-                let (near, dn, far, df) = if dl <= dr {
-                    (l, dl, r, dr)
+        // The node in hand and its box distance; the nearer child of an
+        // inner node is taken next without a trip through the stack.
+        let (mut ni, mut d2) = (0u32, self.nodes[0].dist2(p));
+        loop {
+            if d2 < best.d2 {
+                let node = &self.nodes[ni as usize];
+                if node.is_leaf() {
+                    let s = node.index as usize;
+                    for t in s..s + node.count as usize {
+                        self.test(p, t, &mut best);
+                    }
                 } else {
-                    (r, dr, l, dl)
-                };
-                if df < best.d2 {
-                    stack[sp] = (far, df);
-                    sp += 1;
-                }
-                if dn < best.d2 {
-                    stack[sp] = (near, dn);
-                    sp += 1;
+                    let (l, r) = (ni + 1, node.index);
+                    let dl = self.nodes[l as usize].dist2(p);
+                    let dr = self.nodes[r as usize].dist2(p);
+                    let (near, dn, far, df) = if dl <= dr {
+                        (l, dl, r, dr)
+                    } else {
+                        (r, dr, l, dl)
+                    };
+                    if dn < best.d2 {
+                        if df < best.d2 {
+                            stack[sp] = (far, df);
+                            sp += 1;
+                        }
+                        (ni, d2) = (near, dn);
+                        continue;
+                    }
                 }
             }
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            (ni, d2) = stack[sp];
         }
         best
     }

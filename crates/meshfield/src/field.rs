@@ -99,7 +99,63 @@ pub struct MeshField {
     bbox: [[f64; 3]; 2],
     diag: f64,
     beta: f64,
+    /// Cached per-cell search seeds and signs ([`SeedGrid`]).
+    grid: Option<SeedGrid>,
 }
+
+/// A uniform grid over the mesh's box (grown a little), built with the
+/// field: per cell the triangle nearest to its centre (a seed that bounds
+/// the nearest-triangle search of any point in the cell from the start)
+/// and, for the winding-number sign, the sign of the whole cell where
+/// [`winding::winding_interval`] decides it (the fast winding number at
+/// every point of the cell is then on the same side of 1/2, so the
+/// point's sign is known without evaluating it). Both depend only on the
+/// mesh, so answers stay a function of the point alone.
+struct SeedGrid {
+    lo: [f64; 3],
+    /// Cells per unit length along each axis.
+    inv: [f64; 3],
+    n: [usize; 3],
+    /// Nearest triangle (leaf order) to each cell's centre.
+    seed: Vec<u32>,
+    /// Sign of the cell: 1 inside, -1 outside, 0 unknown (always 0 for the
+    /// pseudo-normal sign, which is cheap anyway).
+    sign: Vec<i8>,
+}
+
+impl SeedGrid {
+    /// The cell holding `p`, if any (`p` finite).
+    #[inline]
+    fn cell(&self, p: [f64; 3]) -> Option<usize> {
+        let mut idx = 0;
+        for a in 0..3 {
+            let f = (p[a] - self.lo[a]) * self.inv[a];
+            // Also false for NaN.
+            if !(f >= 0.0 && f < self.n[a] as f64) {
+                return None;
+            }
+            let i = (f as usize).min(self.n[a] - 1);
+            idx = idx * self.n[a] + i;
+        }
+        Some(idx)
+    }
+
+    /// The box of cell `(i, j, k)`, widened by a millionth of a cell on
+    /// every side so that it holds every point that [`SeedGrid::cell`]
+    /// maps to it despite rounding.
+    fn cell_box(&self, ijk: [usize; 3]) -> [Interval; 3] {
+        std::array::from_fn(|a| {
+            let w = 1.0 / self.inv[a];
+            let lo = self.lo[a] + ijk[a] as f64 * w;
+            Interval::new(lo - 1e-6 * w, lo + w + 1e-6 * w)
+        })
+    }
+}
+
+/// Cells of the [`SeedGrid`] per triangle, and the bounds of its size.
+const GRID_CELLS_PER_TRIANGLE: usize = 2;
+const GRID_MIN_CELLS: usize = 4096;
+const GRID_MAX_CELLS: usize = 1 << 16;
 
 impl fmt::Debug for MeshField {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -150,8 +206,14 @@ impl MeshField {
             // Expansions: at most 2 t nodes of 152 bytes.
             _ => t.saturating_mul(2 * 152),
         };
+        // The seed grid: a triangle and a sign per cell.
+        let grid = (GRID_CELLS_PER_TRIANGLE as u64)
+            .saturating_mul(t)
+            .clamp(GRID_MIN_CELLS as u64, GRID_MAX_CELLS as u64)
+            * 5;
         bvh::predict_bytes(t)
             .saturating_add(common)
+            .saturating_add(grid)
             .saturating_add(sign_bytes)
     }
 
@@ -250,7 +312,80 @@ impl MeshField {
             bbox,
             diag: norm(sub(bbox[1], bbox[0])),
             beta: opts.beta,
+            grid: None,
         })
+        .map(|mut f| {
+            f.grid = f.seed_grid();
+            f
+        })
+    }
+
+    /// The [`SeedGrid`] of a field built without one.
+    fn seed_grid(&self) -> Option<SeedGrid> {
+        if self.bvh.tris.is_empty() || !self.diag.is_finite() || self.diag <= 0.0 {
+            return None;
+        }
+        let [blo, bhi] = self.bbox;
+        let lo: [f64; 3] =
+            std::array::from_fn(|a| blo[a] - 0.1 * (bhi[a] - blo[a]) - 0.01 * self.diag);
+        let hi: [f64; 3] =
+            std::array::from_fn(|a| bhi[a] + 0.1 * (bhi[a] - blo[a]) + 0.01 * self.diag);
+        let ext: [f64; 3] = std::array::from_fn(|a| hi[a] - lo[a]);
+        let cells =
+            (GRID_CELLS_PER_TRIANGLE * self.bvh.tris.len()).clamp(GRID_MIN_CELLS, GRID_MAX_CELLS);
+        let size = (ext[0] * ext[1] * ext[2] / cells as f64).cbrt();
+        if !(size.is_finite() && size > 0.0) {
+            return None;
+        }
+        let n: [usize; 3] =
+            std::array::from_fn(|a| ((ext[a] / size).ceil() as usize).clamp(1, 1024));
+        let inv: [f64; 3] = std::array::from_fn(|a| n[a] as f64 / ext[a]);
+        let mut grid = SeedGrid {
+            lo,
+            inv,
+            n,
+            seed: Vec::new(),
+            sign: Vec::new(),
+        };
+        let winding = matches!(self.sign, Sign::Winding { .. });
+        // One row (fixed i, j) per task; along the row the previous
+        // cell's triangle seeds the next search.
+        let rows: Vec<(Vec<u32>, Vec<i8>)> = (0..n[0] * n[1])
+            .into_par_iter()
+            .map(|row| {
+                let (i, j) = (row / n[1], row % n[1]);
+                let mut seeds = Vec::with_capacity(n[2]);
+                let mut signs = Vec::with_capacity(n[2]);
+                let mut prev = u32::MAX;
+                for k in 0..n[2] {
+                    let b = grid.cell_box([i, j, k]);
+                    let c = [0, 1, 2].map(|a| b[a].mid());
+                    let mut seed = Hit::NONE;
+                    if prev != u32::MAX {
+                        self.bvh.test(c, prev as usize, &mut seed);
+                    }
+                    let h = self.bvh.closest(c, seed);
+                    prev = h.tri;
+                    seeds.push(h.tri);
+                    let mut s = 0i8;
+                    if winding {
+                        let v = self.interval(b);
+                        if v.lo > 0.0 {
+                            s = 1;
+                        } else if v.hi < 0.0 {
+                            s = -1;
+                        }
+                    }
+                    signs.push(s);
+                }
+                (seeds, signs)
+            })
+            .collect();
+        for (a, b) in rows {
+            grid.seed.extend(a);
+            grid.sign.extend(b);
+        }
+        Some(grid)
     }
 
     /// The sign rule in use ([`SignMethod::Auto`] resolved).
@@ -363,6 +498,15 @@ impl MeshField {
     fn probe(&self, p: [f64; 3], seed: Hit) -> Probe {
         let far = self.far_excess(p);
         if p.iter().all(|c| c.is_finite()) {
+            let mut seed = seed;
+            if let Some(g) = &self.grid {
+                if let Some(c) = g.cell(p) {
+                    let t = g.seed[c];
+                    if t != u32::MAX && t != seed.tri {
+                        self.bvh.test(p, t as usize, &mut seed);
+                    }
+                }
+            }
             let h = self.bvh.closest(p, seed);
             if h.tri != u32::MAX && h.d2.is_finite() {
                 if far.is_none() {
@@ -443,6 +587,18 @@ impl MeshField {
                 }
             }
             Sign::Winding { expansions } => {
+                // The cell's sign where the grid knows it (`p` is then in a
+                // cell whose box keeps clear of the surface and over which
+                // the fast winding number stays on one side of 1/2).
+                if let Some(g) = &self.grid {
+                    if let Some(c) = g.cell(p) {
+                        match g.sign[c] {
+                            1 => return 1.0,
+                            -1 => return -1.0,
+                            _ => {}
+                        }
+                    }
+                }
                 if winding::winding_number(&self.bvh, expansions, p) > 0.5 {
                     1.0
                 } else {
@@ -674,7 +830,8 @@ impl Field for MeshField {
 
     fn eval_batch(&self, x: &[f32], y: &[f32], z: &[f32], out: &mut [f32]) {
         // Neighbouring points of a block share their nearest triangle more
-        // often than not: the previous point's triangle seeds the search.
+        // often than not: outside the seed grid the previous point's
+        // triangle seeds the search.
         let mut prev = u32::MAX;
         for i in 0..out.len() {
             let p = [x[i] as f64, y[i] as f64, z[i] as f64];
@@ -683,7 +840,10 @@ impl Field for MeshField {
                 continue;
             }
             let mut seed = Hit::NONE;
-            if prev != u32::MAX {
+            // Inside the seed grid its cell's triangle seeds the search
+            // ([`MeshField::probe`]); the previous point's is for elsewhere.
+            let in_grid = self.grid.as_ref().is_some_and(|g| g.cell(p).is_some());
+            if prev != u32::MAX && !in_grid {
                 self.bvh.test(p, prev as usize, &mut seed);
             }
             let probe = self.probe(p, seed);

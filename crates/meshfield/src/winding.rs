@@ -19,11 +19,15 @@ pub struct Expansion {
     /// Squared far-field radius: the expansion is used when the query is
     /// farther than this from `center` (beta times the node's radius).
     pub far2: f64,
-    /// Coefficients: N (3), M (9, row i = normal component), T (18: for
-    /// each i, the symmetric jk in the order 00 01 02 11 12 22).
-    pub c: [f32; 30],
+    /// The expansion as a polynomial in `y = center - q` over powers of
+    /// `1/r` ([`expansion_value`]): `r^-3 (k0 + N.y)` (k0 = tr M, then N),
+    /// `r^-5` times the quadratic form `-3 y.M.y` (xx yy zz xy xz yz) plus
+    /// `-3/2 (2u + v).y`, and `r^-7` times the cubic form `15/2 T[y,y,y]`
+    /// (xxx yyy zzz xxy xxz xyy xzz yyz yzz xyz).
+    pub k: [f32; 23],
+    /// Frobenius norms of N, M and T, rounded up (for the gradient bound).
+    pub norms: [f32; 3],
 }
-
 /// Moments of a subtree about its centroid, in f64, while building.
 #[derive(Clone, Copy)]
 struct Moments {
@@ -106,26 +110,65 @@ fn leaf_moments(tris: &[[[f64; 3]; 3]]) -> Moments {
 }
 
 fn pack(mo: &Moments, beta: f64) -> Expansion {
-    let mut c = [0f32; 30];
+    let (n, m, t) = (mo.n, mo.m, mo.t);
+    let mut k = [0f64; 23];
+    k[0] = m[0][0] + m[1][1] + m[2][2];
+    k[1..4].copy_from_slice(&n);
+    for (q, (i, j)) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+        .iter()
+        .enumerate()
+    {
+        k[4 + q] = if i == j {
+            -3.0 * m[*i][*j]
+        } else {
+            -3.0 * (m[*i][*j] + m[*j][*i])
+        };
+    }
     for i in 0..3 {
-        c[i] = mo.n[i] as f32;
-        for j in 0..3 {
-            c[3 + 3 * i + j] = mo.m[i][j] as f32;
+        // u_i = sum_j T_jji, v_i = sum_j T_ijj.
+        let u = t[0][0][i] + t[1][1][i] + t[2][2][i];
+        let v = t[i][0][0] + t[i][1][1] + t[i][2][2];
+        k[10 + i] = -1.5 * (2.0 * u + v);
+    }
+    // Cubic monomials, each summing T over the orderings of its indices.
+    let mono = |a: usize, b: usize, c: usize| -> usize {
+        let mut x = [a, b, c];
+        x.sort_unstable();
+        match x {
+            [0, 0, 0] => 0,
+            [1, 1, 1] => 1,
+            [2, 2, 2] => 2,
+            [0, 0, 1] => 3,
+            [0, 0, 2] => 4,
+            [0, 1, 1] => 5,
+            [0, 2, 2] => 6,
+            [1, 1, 2] => 7,
+            [1, 2, 2] => 8,
+            _ => 9,
         }
-        for (q, (j, k)) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
-            .iter()
-            .enumerate()
-        {
-            c[12 + 6 * i + q] = mo.t[i][*j][*k] as f32;
+    };
+    for i in 0..3 {
+        for j in 0..3 {
+            for l in 0..3 {
+                k[13 + mono(i, j, l)] += 7.5 * t[i][j][l];
+            }
         }
     }
+    let frob = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+    let up = |x: f64| (x * (1.0 + 1e-6)) as f32;
+    let norms = [
+        up(frob(&mut n.iter().copied())),
+        up(frob(&mut m.iter().flatten().copied())),
+        up(frob(&mut t.iter().flatten().flatten().copied())),
+    ];
     // Round the radius up a little so the f64 rounding of the centre and of
     // the query never makes a point count as far when it is not.
     let r = beta * mo.radius * (1.0 + 1e-12) + 1e-300;
     Expansion {
         center: mo.center,
         far2: r * r,
-        c,
+        k: k.map(|x| x as f32),
+        norms,
     }
 }
 
@@ -201,47 +244,12 @@ pub fn build(bvh: &Bvh, beta: f64) -> Vec<Expansion> {
     let blank = Expansion {
         center: [0.0; 3],
         far2: 0.0,
-        c: [0.0; 30],
+        k: [0.0; 23],
+        norms: [0.0; 3],
     };
     let mut out = vec![blank; bvh.nodes.len()];
     build_rec(bvh, 0, &mut out, beta);
     out
-}
-
-/// Arithmetic of the expansion formula (kept generic so that other number
-/// types, e.g. f32 or intervals, can share it).
-trait Num: Copy {
-    fn k(v: f64) -> Self;
-    fn add(self, o: Self) -> Self;
-    fn sub(self, o: Self) -> Self;
-    fn mul(self, o: Self) -> Self;
-    fn sq(self) -> Self;
-    fn sqrt(self) -> Self;
-    fn recip(self) -> Self;
-}
-
-impl Num for f64 {
-    fn k(v: f64) -> Self {
-        v
-    }
-    fn add(self, o: Self) -> Self {
-        self + o
-    }
-    fn sub(self, o: Self) -> Self {
-        self - o
-    }
-    fn mul(self, o: Self) -> Self {
-        self * o
-    }
-    fn sq(self) -> Self {
-        self * self
-    }
-    fn sqrt(self) -> Self {
-        f64::sqrt(self)
-    }
-    fn recip(self) -> Self {
-        1.0 / self
-    }
 }
 
 /// Bound of the gradient (with respect to the query) of the expansion's
@@ -250,108 +258,72 @@ impl Num for f64 {
 /// Frobenius norms; `sqrt(90)` and `sqrt(2520)` are the norms of the second
 /// and third derivative tensors of `F(y) = y / |y|^3` at `|y| = 1` (they do
 /// not depend on the direction).
-fn lipschitz(c: &[f32; 30], r: f64) -> f64 {
-    let sq = |i: usize| (c[i] as f64) * (c[i] as f64);
-    let n = (0..3).map(sq).sum::<f64>().sqrt();
-    let m = (3..12).map(sq).sum::<f64>().sqrt();
-    // Off-diagonal jk entries stand for two tensor entries.
-    let t = (0..3)
-        .map(|i| {
-            let b = 12 + 6 * i;
-            sq(b) + sq(b + 3) + sq(b + 5) + 2.0 * (sq(b + 1) + sq(b + 2) + sq(b + 4))
-        })
-        .sum::<f64>()
-        .sqrt();
+fn lipschitz(e: &Expansion, r: f64) -> f64 {
+    let [n, m, t] = e.norms.map(|x| x as f64);
     let r3 = r * r * r;
     2.0 * n / r3 + 9.4869 * m / (r3 * r) + 25.1 * t / (r3 * r * r)
 }
 
 /// The expansion's solid angle (not divided by 4 pi) at offset
-/// `y = center - q`.
-fn expansion_value<N: Num>(c: &[f32; 30], y: [N; 3]) -> N {
-    let g = |i: usize| N::k(c[i] as f64);
-    let r2 = y[0].sq().add(y[1].sq()).add(y[2].sq());
-    let ir2 = r2.recip();
-    let ir3 = ir2.mul(r2.sqrt().recip());
-    let ir5 = ir3.mul(ir2);
-    let ir7 = ir5.mul(ir2);
-    // Order 0: N . y / r^3.
-    let ny = g(0).mul(y[0]).add(g(1).mul(y[1])).add(g(2).mul(y[2]));
-    let mut total = ny.mul(ir3);
-    // Order 1: tr(M) / r^3 - 3 y.M.y / r^5.
-    let tr = g(3).add(g(7)).add(g(11));
-    let mut ymy = N::k(0.0);
-    for i in 0..3 {
-        let row = g(3 + 3 * i)
-            .mul(y[0])
-            .add(g(4 + 3 * i).mul(y[1]))
-            .add(g(5 + 3 * i).mul(y[2]));
-        ymy = ymy.add(y[i].mul(row));
-    }
-    total = total.add(tr.mul(ir3)).sub(N::k(3.0).mul(ymy).mul(ir5));
-    // Order 2: (-3 (2 u.y + v.y) / r^5 + 15 T[y,y,y] / r^7) / 2.
-    let t = |i: usize, j: usize, k: usize| {
-        let (a, b) = if j <= k { (j, k) } else { (k, j) };
-        let q = match (a, b) {
-            (0, 0) => 0,
-            (0, 1) => 1,
-            (0, 2) => 2,
-            (1, 1) => 3,
-            (1, 2) => 4,
-            _ => 5,
-        };
-        g(12 + 6 * i + q)
-    };
-    let mut uy = N::k(0.0);
-    let mut vy = N::k(0.0);
-    let mut tyyy = N::k(0.0);
-    for i in 0..3 {
-        // u_i = sum_j T_jji, v_i = sum_j T_ijj.
-        let u = t(0, 0, i).add(t(1, 1, i)).add(t(2, 2, i));
-        let v = t(i, 0, 0).add(t(i, 1, 1)).add(t(i, 2, 2));
-        uy = uy.add(u.mul(y[i]));
-        vy = vy.add(v.mul(y[i]));
-        let quad = t(i, 0, 0)
-            .mul(y[0].sq())
-            .add(t(i, 1, 1).mul(y[1].sq()))
-            .add(t(i, 2, 2).mul(y[2].sq()))
-            .add(N::k(2.0).mul(t(i, 0, 1).mul(y[0].mul(y[1]))))
-            .add(N::k(2.0).mul(t(i, 0, 2).mul(y[0].mul(y[2]))))
-            .add(N::k(2.0).mul(t(i, 1, 2).mul(y[1].mul(y[2]))));
-        tyyy = tyyy.add(y[i].mul(quad));
-    }
-    let o2 = N::k(-3.0)
-        .mul(N::k(2.0).mul(uy).add(vy))
-        .mul(ir5)
-        .add(N::k(15.0).mul(tyyy).mul(ir7));
-    total.add(N::k(0.5).mul(o2))
+/// `y = center - q`: order 0, `N.y / r^3`; order 1,
+/// `tr(M) / r^3 - 3 y.M.y / r^5`; order 2,
+/// `(-3 (2 u.y + v.y) / r^5 + 15 T[y,y,y] / r^7) / 2` (u_i = T_jji,
+/// v_i = T_ijj), gathered by power of `1/r` ([`Expansion::k`]).
+#[inline(always)]
+fn expansion_value(e: &Expansion, y: [f64; 3]) -> f64 {
+    let k = e.k.map(|c| c as f64);
+    let [a, b, c] = y;
+    let r2 = a * a + b * b + c * c;
+    let ir = 1.0 / r2.sqrt();
+    let ir2 = ir * ir;
+    let ir3 = ir2 * ir;
+    let (aa, bb, cc) = (a * a, b * b, c * c);
+    let lin3 = k[0] + k[1] * a + k[2] * b + k[3] * c;
+    let quad5 = k[4] * aa
+        + k[5] * bb
+        + k[6] * cc
+        + k[7] * (a * b)
+        + k[8] * (a * c)
+        + k[9] * (b * c)
+        + (k[10] * a + k[11] * b + k[12] * c);
+    let cub7 = a * (k[13] * aa + k[18] * bb + k[19] * cc + k[22] * (b * c))
+        + b * (k[14] * bb + k[16] * aa + k[21] * cc)
+        + c * (k[15] * cc + k[17] * aa + k[20] * bb);
+    ir3 * (lin3 + ir2 * (quad5 + ir2 * cub7))
 }
 
 /// Generalized winding number at `q` by the hierarchy.
 pub fn winding_number(bvh: &Bvh, exps: &[Expansion], q: [f64; 3]) -> f64 {
     let mut stack = [0u32; 128];
-    let mut sp = 1;
+    let mut sp = 0;
     let mut sum = 0.0;
-    while sp > 0 {
-        sp -= 1;
-        let ni = stack[sp] as usize;
+    // The node in hand; an opened node's left child comes next directly,
+    // its right one through the stack (the order of the sum is unchanged).
+    let mut ni = 0usize;
+    loop {
         let e = &exps[ni];
         let y = sub(e.center, q);
         if y[0] * y[0] + y[1] * y[1] + y[2] * y[2] > e.far2 {
-            sum += expansion_value(&e.c, y);
-            continue;
-        }
-        let node = &bvh.nodes[ni];
-        if node.is_leaf() {
-            let s = node.index as usize;
-            for t in &bvh.tris[s..s + node.count as usize] {
-                sum += solid_angle(q, t);
-            }
+            sum += expansion_value(e, y);
         } else {
-            stack[sp] = node.index;
-            stack[sp + 1] = ni as u32 + 1;
-            sp += 2;
+            let node = &bvh.nodes[ni];
+            if node.is_leaf() {
+                let s = node.index as usize;
+                for t in &bvh.tris[s..s + node.count as usize] {
+                    sum += solid_angle(q, t);
+                }
+            } else {
+                stack[sp] = node.index;
+                sp += 1;
+                ni += 1;
+                continue;
+            }
         }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        ni = stack[sp] as usize;
     }
     sum / FOUR_PI
 }
@@ -427,8 +399,8 @@ pub fn winding_interval(
             if dmin2 <= 0.0 {
                 return None;
             }
-            let v = expansion_value(&e.c, sub(e.center, b.c));
-            let spread = lipschitz(&e.c, dmin2.sqrt()) * b.h * (1.0 + 1e-9) + 1e-12;
+            let v = expansion_value(e, sub(e.center, b.c));
+            let spread = lipschitz(e, dmin2.sqrt()) * b.h * (1.0 + 1e-9) + 1e-12;
             if !(v.is_finite() && spread.is_finite()) {
                 return None;
             }
@@ -518,7 +490,7 @@ mod tests {
         let err = |s: f64| {
             let q = [5.0 * s, 1.0 * s, -2.0 * s];
             let exact: f64 = open.iter().map(|t| solid_angle(q, t)).sum();
-            (exact - expansion_value(&e.c, sub(e.center, q))).abs()
+            (exact - expansion_value(&e, sub(e.center, q))).abs()
         };
         let (e1, e2, e4) = (err(1.0), err(2.0), err(4.0));
         eprintln!("{e1} {e2} {e4}");
