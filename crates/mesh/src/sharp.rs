@@ -208,7 +208,7 @@ pub fn feature_point(ps: &[[f64; 3]], ns: &[[f64; 3]]) -> Option<Feature> {
 /// [`feature_point`] of many cycles at once, the vertices and normals of
 /// cycle `i` being `ps[r.clone()]` and `ns[r.clone()]` for the `i`-th range
 /// `r` of `cycles`: the same results, bit for bit, with the eigenvectors
-/// of several matrices found side by side ([`eigen_lanes`]).
+/// of several matrices found side by side (four at a time in vector lanes).
 pub fn feature_points(
     ps: &[[f64; 3]],
     ns: &[[f64; 3]],

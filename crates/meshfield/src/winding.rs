@@ -20,7 +20,7 @@ pub struct Expansion {
     /// farther than this from `center` (beta times the node's radius).
     pub far2: f64,
     /// The expansion as a polynomial in `y = center - q` over powers of
-    /// `1/r` ([`expansion_value`]): `r^-3 (k0 + N.y)` (k0 = tr M, then N),
+    /// `1/r` (`expansion_value`): `r^-3 (k0 + N.y)` (k0 = tr M, then N),
     /// `r^-5` times the quadratic form `-3 y.M.y` (xx yy zz xy xz yz) plus
     /// `-3/2 (2u + v).y`, and `r^-7` times the cubic form `15/2 T[y,y,y]`
     /// (xxx yyy zzz xxy xxz xyy xzz yyz yzz xyz).
