@@ -518,6 +518,17 @@ fn eval_flags_after_negative_coordinates_and_fields_bound_twice() {
     assert!(code != 0 && err.contains("bound twice"), "{err}");
 }
 
+/// An axis cube of side 2 about the origin, as HyperFun.
+const CUBE: &str =
+    "my_model(x[3], a[1]) {\n  my_model = min(min(1 - abs(x[1]), 1 - abs(x[2])), 1 - abs(x[3]));\n}\n";
+
+/// The largest distance of a face of the box `b` from that of [-1, 1]^3.
+fn off_unit_box(b: [[f64; 3]; 2]) -> f64 {
+    (0..3)
+        .map(|a| (b[0][a] + 1.0).abs().max((b[1][a] - 1.0).abs()))
+        .fold(0.0, f64::max)
+}
+
 /// `mesh --sharp` keeps a CAD part's faces where they are: an axis cube
 /// of side 2 meshed at 20 cells has its box at +-1 within 0.02 cells, where
 /// the default's volume correction pushes the faces out by about 0.2
@@ -526,11 +537,7 @@ fn eval_flags_after_negative_coordinates_and_fields_bound_twice() {
 fn sharp_meshes_keep_a_cubes_faces_on_their_planes() {
     let d = dir("sharp");
     let m = d.join("cube.hf");
-    std::fs::write(
-        &m,
-        "my_model(x[3], a[1]) {\n  my_model = min(min(1 - abs(x[1]), 1 - abs(x[2])), 1 - abs(x[3]));\n}\n",
-    )
-    .unwrap();
+    std::fs::write(&m, CUBE).unwrap();
     let mesh = |extra: &[&str], out: &Path| {
         let mut args = vec![
             "mesh",
@@ -550,12 +557,7 @@ fn sharp_meshes_keep_a_cubes_faces_on_their_planes() {
     let h = 2.4 / 25.0;
     let plain = mesh(&[], &d.join("plain.stl"));
     let sharp = mesh(&["--sharp"], &d.join("sharp.stl"));
-    let off = |b: [[f64; 3]; 2]| {
-        (0..3)
-            .map(|a| (b[0][a] + 1.0).abs().max((b[1][a] - 1.0).abs()))
-            .fold(0.0, f64::max)
-            / h
-    };
+    let off = |b: [[f64; 3]; 2]| off_unit_box(b) / h;
     assert!(off(sharp) < 0.02, "sharp box {sharp:?}");
     assert!(
         off(plain) > 0.05,
@@ -582,11 +584,7 @@ fn sharp_meshes_keep_a_cubes_faces_on_their_planes() {
 fn tolerance_merges_a_cubes_faces_and_reports_it() {
     let d = dir("tolerance");
     let m = d.join("cube.hf");
-    std::fs::write(
-        &m,
-        "my_model(x[3], a[1]) {\n  my_model = min(min(1 - abs(x[1]), 1 - abs(x[2])), 1 - abs(x[3]));\n}\n",
-    )
-    .unwrap();
+    std::fs::write(&m, CUBE).unwrap();
     let h = 2.4 / 25.0;
     let mesh = |extra: &[&str], out: &Path| {
         let mut args = vec![
@@ -619,10 +617,7 @@ fn tolerance_merges_a_cubes_faces_and_reports_it() {
         );
         assert!(merged["deviation"].as_f64().unwrap() <= limit, "{j}");
         assert_eq!(j["bad_edges"], 0, "{j}");
-        let off = (0..3)
-            .map(|a| (b[0][a] + 1.0).abs().max((b[1][a] - 1.0).abs()))
-            .fold(0.0, f64::max);
-        assert!(off < 0.02 * h, "{b:?}");
+        assert!(off_unit_box(b) < 0.02 * h, "{b:?}");
         let v = j["volume"].as_f64().unwrap();
         assert!((v - 8.0).abs() < 1e-4, "{j}");
     }
