@@ -46,9 +46,9 @@ pub struct MeshArgs {
     /// Keep creases and corners (CAD parts, CSG): where the normals in a
     /// cell spread, a vertex where the tangent planes meet; flat faces stay
     /// flat. On a box in general position, creases, corners and faces come
-    /// out exact to 1e-6 cells; creases with a curved side come within a
-    /// few hundredths of a cell, and feature-rich lattices mesh about 4x
-    /// slower. With --cells cubes only.
+    /// within 0.015 cells; creases with a curved side come within a few
+    /// hundredths of a cell, and strongly curved lattices mesh about 3x
+    /// slower (their cells look like creases). With --cells cubes only.
     #[arg(long)]
     sharp: bool,
     /// Merge flat regions and straight creases into fewer, larger
