@@ -60,6 +60,9 @@ pub struct CheckReport {
     pub diagnostics: Diagnostics,
     /// Errors without a position (e.g. no such object).
     pub unlocated: Vec<String>,
+    /// The evaluated object lowered with the parameters and fields, when
+    /// it lowers (errors of other objects do not stop it).
+    pub model: Option<lower::Model>,
 }
 
 impl CheckReport {
@@ -122,6 +125,7 @@ pub fn check_with(
     let mut evaluated = None;
     let mut per_point = false;
     let mut per_point_reason = None;
+    let mut model = None;
     match lower::select_object(&program, object) {
         Some(i) => {
             let o = &program.objects[i];
@@ -129,7 +133,8 @@ pub fn check_with(
             match lower::load_program_with(program.clone(), object, &opts.params, &registry) {
                 Ok(m) => {
                     per_point = !m.lowered;
-                    per_point_reason = m.per_point;
+                    per_point_reason = m.per_point.clone();
+                    model = Some(m);
                 }
                 // Parameter errors (the object's own errors are above).
                 Err(e) if e.pos.line == 0 => report(&mut items, &o.name, e),
@@ -159,5 +164,6 @@ pub fn check_with(
             ..Default::default()
         },
         unlocated,
+        model,
     })
 }

@@ -35,6 +35,7 @@
 //! dropped), so the output is the same on any thread count.
 
 use crate::Mesh;
+use microfrep_core::geom::{cross, dot, sub};
 use microfrep_core::{GradEval, Tape};
 
 /// Normals closer than this (degrees) count as one direction.
@@ -148,22 +149,6 @@ struct Decimator {
     cos_plane: f64,
     /// Whether the bounds of planar fans may stand for sampling.
     use_bounds: bool,
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn unit(a: [f64; 3]) -> Option<[f64; 3]> {

@@ -1323,15 +1323,11 @@ pub struct SourceCheck {
 /// first error.
 pub fn check_source(src: &str, file: &str, opts: &microfrep_hyperfun::LoadOptions) -> SourceCheck {
     microfrep_structures_hf::install();
-    let (diagnostics, unlocated, parsed) =
+    let (diagnostics, unlocated, model) =
         match microfrep_hyperfun::check::check_with(src, file, opts) {
-            Ok(r) => (r.diagnostics, r.unlocated, true),
-            Err(parse) => (parse, Vec::new(), false),
+            Ok(r) => (r.diagnostics, r.unlocated, r.model),
+            Err(parse) => (parse, Vec::new(), None),
         };
-    // Errors of other objects do not stop the evaluated one.
-    let model = parsed
-        .then(|| microfrep_hyperfun::load_with_options(src, file, opts).ok())
-        .flatten();
     let mut rendered = diagnostics.render(src);
     for m in &unlocated {
         rendered += &format!("{file}: error: {m}\n");
